@@ -1,0 +1,138 @@
+#pragma once
+/// Volume<T>: a 3D voxel grid placed in world space (patient LPS, millimetres).
+///
+/// Indexed (i, j, k) with i fastest in memory, as NIfTI stores it: data()[i + nx * (j + ny * k)].
+/// Voxel (i, j, k) has its centre at
+///   world = origin + direction * diag(spacing) * (i, j, k)^T
+/// so `origin` is the centre of voxel (0, 0, 0) and the columns of `direction` are the unit
+/// world directions of the i, j, k axes. Invariants: spacing > 0 and finite; direction is
+/// orthonormal (det +-1). The voxel model treats each voxel as a box of size `spacing` centred
+/// on its centre, so the volume covers index coordinates [-0.5, n - 0.5] on each axis.
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+
+namespace gimm {
+
+struct VolumeGeometry {
+  std::array<int, 3> dims{0, 0, 0};
+  Eigen::Vector3d spacing{1.0, 1.0, 1.0};  ///< mm per voxel along i, j, k
+  Eigen::Vector3d origin{0.0, 0.0, 0.0};   ///< world mm of the centre of voxel (0, 0, 0)
+  Eigen::Matrix3d direction = Eigen::Matrix3d::Identity();  ///< columns: world axes of i, j, k
+
+  std::int64_t voxel_count() const {
+    return static_cast<std::int64_t>(dims[0]) * dims[1] * dims[2];
+  }
+  /// index -> world matrix A (world = origin + A * ijk).
+  Eigen::Matrix3d index_to_world_matrix() const { return direction * spacing.asDiagonal(); }
+  Eigen::Vector3d index_to_world(const Eigen::Vector3d& ijk) const {
+    return origin + index_to_world_matrix() * ijk;
+  }
+  Eigen::Vector3d world_to_index(const Eigen::Vector3d& world) const {
+    // direction is orthonormal, so A^-1 = diag(1/spacing) * direction^T.
+    return spacing.cwiseInverse().asDiagonal() * (direction.transpose() * (world - origin));
+  }
+  /// True when the continuous index lies in the voxel model [-0.5, n - 0.5]^3.
+  bool contains_index(const Eigen::Vector3d& ijk) const {
+    for (int a = 0; a < 3; ++a)
+      if (!(ijk[a] >= -0.5 && ijk[a] <= dims[a] - 0.5)) return false;
+    return true;
+  }
+
+  /// Throws gimm::Error naming `what` if dims, spacing, origin or direction are invalid.
+  void validate(const char* what) const {
+    for (int a = 0; a < 3; ++a) {
+      GIMM_CHECK(dims[a] > 0 && dims[a] <= 65536,
+                 what << ": dimension " << a << " must be in [1, 65536], got " << dims[a]);
+      GIMM_CHECK(std::isfinite(spacing[a]) && spacing[a] > 0,
+                 what << ": spacing " << a << " must be finite and > 0, got " << spacing[a]);
+      GIMM_CHECK(std::isfinite(origin[a]), what << ": origin " << a << " is " << origin[a]);
+    }
+    GIMM_CHECK(direction.allFinite(), what << ": direction has non-finite entries");
+    const double orthonormality =
+        (direction.transpose() * direction - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    GIMM_CHECK(orthonormality < 1e-4,
+               what << ": direction is not orthonormal (|D^T D - I| = " << orthonormality << ")");
+  }
+};
+
+template <class T>
+class Volume {
+ public:
+  Volume() = default;
+  explicit Volume(const VolumeGeometry& geometry, T fill = T{}) : geometry_(geometry) {
+    geometry_.validate("Volume");
+    data_.assign(static_cast<std::size_t>(geometry_.voxel_count()), fill);
+  }
+
+  const VolumeGeometry& geometry() const { return geometry_; }
+  const std::array<int, 3>& dims() const { return geometry_.dims; }
+  int nx() const { return geometry_.dims[0]; }
+  int ny() const { return geometry_.dims[1]; }
+  int nz() const { return geometry_.dims[2]; }
+  const Eigen::Vector3d& spacing() const { return geometry_.spacing; }
+  const Eigen::Vector3d& origin() const { return geometry_.origin; }
+  const Eigen::Matrix3d& direction() const { return geometry_.direction; }
+  std::size_t size() const { return data_.size(); }
+
+  std::size_t linear_index(int i, int j, int k) const {
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(nx()) *
+               (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny()) * k);
+  }
+  bool contains(int i, int j, int k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < nx() && j < ny() && k < nz();
+  }
+  T& operator()(int i, int j, int k) {
+    GIMM_ASSERT(contains(i, j, k));
+    return data_[linear_index(i, j, k)];
+  }
+  const T& operator()(int i, int j, int k) const {
+    GIMM_ASSERT(contains(i, j, k));
+    return data_[linear_index(i, j, k)];
+  }
+
+  Eigen::Vector3d index_to_world(const Eigen::Vector3d& ijk) const {
+    return geometry_.index_to_world(ijk);
+  }
+  Eigen::Vector3d world_to_index(const Eigen::Vector3d& world) const {
+    return geometry_.world_to_index(world);
+  }
+
+  /// Trilinear interpolation at a continuous index; voxels outside the grid count as
+  /// `outside` (0 by default), so the field falls off linearly across the border half-voxel.
+  double sample_index(const Eigen::Vector3d& ijk, double outside = 0.0) const {
+    const double fi = std::floor(ijk[0]), fj = std::floor(ijk[1]), fk = std::floor(ijk[2]);
+    const int i0 = static_cast<int>(fi), j0 = static_cast<int>(fj), k0 = static_cast<int>(fk);
+    const double di = ijk[0] - fi, dj = ijk[1] - fj, dk = ijk[2] - fk;
+    double result = 0.0;
+    for (int c = 0; c < 8; ++c) {
+      const int i = i0 + (c & 1), j = j0 + ((c >> 1) & 1), k = k0 + ((c >> 2) & 1);
+      const double w =
+          ((c & 1) ? di : 1 - di) * (((c >> 1) & 1) ? dj : 1 - dj) * (((c >> 2) & 1) ? dk : 1 - dk);
+      if (w == 0.0) continue;
+      result += w * (contains(i, j, k) ? static_cast<double>((*this)(i, j, k)) : outside);
+    }
+    return result;
+  }
+  double sample_world(const Eigen::Vector3d& world, double outside = 0.0) const {
+    return sample_index(world_to_index(world), outside);
+  }
+
+  T* data() { return data_.data(); }
+  const T* data() const { return data_.data(); }
+  std::vector<T>& storage() { return data_; }
+  const std::vector<T>& storage() const { return data_; }
+
+ private:
+  VolumeGeometry geometry_;
+  std::vector<T> data_;
+};
+
+}  // namespace gimm

@@ -1,0 +1,8 @@
+#pragma once
+/// The geometry room: C-arm cameras, epipolar geometry, F estimation, gating, triangulation.
+#include "gimm/geometry/camera.hpp"
+#include "gimm/geometry/carm.hpp"
+#include "gimm/geometry/epipolar.hpp"
+#include "gimm/geometry/fundamental.hpp"
+#include "gimm/geometry/gating.hpp"
+#include "gimm/geometry/triangulation.hpp"

@@ -1,0 +1,106 @@
+#pragma once
+/// The C-arm: clinical angles and distances -> Camera.
+///
+/// Conventions (DICOM X-ray angiography; tests/geometry/carm_test.cpp flips each one):
+/// - World: patient LPS mm (+x patient left, +y posterior, +z head); isocentre at `isocenter`.
+/// - primary_deg > 0 is LAO, < 0 RAO: a rotation about the head-foot (z) axis that moves the
+///   source towards the patient's right. secondary_deg > 0 is cranial, < 0 caudal: the detector
+///   tilts towards the head, the source towards the feet.
+/// - Source direction from the isocentre, for primary a and secondary b:
+///     s(a, b) = (-sin a cos b, cos a cos b, -sin b);  source = iso + SOD s;  view dir = -s.
+///   At 0/0 (AP) the source is posterior, the detector anterior, and the image shows the
+///   patient's left on the image's right and the head at the top (as viewed from the detector).
+/// - Camera axes: M = Rz(a) Rx(-b) applied to the AP axes (x_cam = +x, y_cam = +z, z_cam = -y).
+///
+/// Defaults: SID 1000 mm, SOD 750 mm (magnification 4/3), 512 x 512 detector of 0.5 mm pixels:
+/// a 256 mm detector, so the field of view at the isocentre is 192 mm (0.375 mm per pixel,
+/// close to a CCTA voxel): an adult heart (about 120-140 mm across) fits with a margin for
+/// its motion and for an off-centre isocentre. Principal point: the detector centre,
+/// ((cols - 1) / 2, (rows - 1) / 2).
+/// The orthographic model images the same isocentre field of view: its pixel size is
+/// pixel_mm * SOD / SID, so both models agree at the isocentre plane.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <optional>
+
+#include "gimm/core/error.hpp"
+#include "gimm/geometry/camera.hpp"
+
+namespace gimm {
+
+constexpr double kPi = 3.14159265358979323846;
+inline double deg_to_rad(double deg) {
+  return deg * kPi / 180.0;
+}
+
+struct CArm {
+  double primary_deg = 0.0;    ///< +LAO / -RAO, degrees
+  double secondary_deg = 0.0;  ///< +cranial / -caudal, degrees
+  double sid_mm = 1000.0;      ///< source to detector
+  double sod_mm = 750.0;       ///< source to isocentre
+  int rows = 512;
+  int cols = 512;
+  double pixel_mm = 0.5;  ///< detector pixel pitch (square pixels)
+  /// Principal point in pixels; the detector centre when unset.
+  std::optional<Eigen::Vector2d> principal_point;
+  Eigen::Vector3d isocenter = Eigen::Vector3d::Zero();  ///< world mm
+  ProjectionModel model = ProjectionModel::perspective;
+
+  /// Throws gimm::Error naming the bad field and value.
+  void validate() const {
+    GIMM_CHECK(std::isfinite(primary_deg) && std::abs(primary_deg) <= 180,
+               "CArm: primary angle must be in [-180, 180] degrees, got " << primary_deg);
+    GIMM_CHECK(std::isfinite(secondary_deg) && std::abs(secondary_deg) < 90,
+               "CArm: secondary angle must be in (-90, 90) degrees, got " << secondary_deg);
+    GIMM_CHECK(std::isfinite(sod_mm) && sod_mm > 0, "CArm: SOD must be > 0 mm, got " << sod_mm);
+    GIMM_CHECK(std::isfinite(sid_mm) && sid_mm > sod_mm,
+               "CArm: SID must exceed SOD (" << sod_mm << " mm), got " << sid_mm);
+    GIMM_CHECK(rows > 0 && rows <= 16384 && cols > 0 && cols <= 16384,
+               "CArm: detector size must be in [1, 16384], got " << rows << " x " << cols);
+    GIMM_CHECK(std::isfinite(pixel_mm) && pixel_mm > 0,
+               "CArm: pixel size must be > 0 mm, got " << pixel_mm);
+    GIMM_CHECK(isocenter.allFinite(), "CArm: isocentre must be finite");
+    if (principal_point)
+      GIMM_CHECK(principal_point->allFinite(), "CArm: principal point must be finite");
+  }
+
+  Eigen::Vector2d principal_point_or_centre() const {
+    return principal_point.value_or(Eigen::Vector2d((cols - 1) / 2.0, (rows - 1) / 2.0));
+  }
+
+  /// World-to-camera rotation (rows: x_cam, y_cam, z_cam in world coordinates).
+  Eigen::Matrix3d rotation() const {
+    const Eigen::Matrix3d M =
+        (Eigen::AngleAxisd(deg_to_rad(primary_deg), Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(-deg_to_rad(secondary_deg), Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
+    Eigen::Matrix3d ap_axes;  // columns: x_cam, y_cam, z_cam at AP
+    ap_axes << 1, 0, 0,       //
+        0, 0, -1,             //
+        0, 1, 0;
+    return (M * ap_axes).transpose();
+  }
+
+  /// Unit vector from the isocentre to the source.
+  Eigen::Vector3d source_direction() const { return -rotation().row(2).transpose(); }
+  Eigen::Vector3d source_position() const { return isocenter + sod_mm * source_direction(); }
+
+  /// The camera of this C-arm pose.
+  Camerad camera() const {
+    validate();
+    const Eigen::Matrix3d R = rotation();
+    const Eigen::Vector2d c = principal_point_or_centre();
+    const double focal = model == ProjectionModel::perspective
+                             ? sid_mm / pixel_mm              // pixels per unit tan
+                             : sid_mm / (pixel_mm * sod_mm);  // pixels per mm at isocentre
+    Eigen::Matrix3d K;
+    K << focal, 0, c.x(),  //
+        0, -focal, c.y(),  //
+        0, 0, 1;
+    const Eigen::Vector3d t = -R * source_position();
+    return Camerad(model, K, R, t, rows, cols);
+  }
+};
+
+}  // namespace gimm

@@ -1,0 +1,341 @@
+#pragma once
+/// Fundamental-matrix estimation from point correspondences x_a[i] <-> x_b[i] (pixels),
+/// with the convention x_b^T F x_a = 0.
+///
+/// - fundamental_8pt: the paper's weighted normalised 8-point (Hartley 1997; Yi et al. 2018).
+///   Unweighted = all weights 1.
+/// - fundamental_affine: the affine F of two orthographic (parallel-beam) views, by the Gold
+///   Standard orthogonal regression (Hartley & Zisserman, alg. 14.1), weighted.
+/// - estimate_fundamental_ransac: MSAC with local optimisation around either solver.
+///
+/// Bad input vs degenerate input:
+/// - Invalid values throw gimm::Error naming the argument: sizes that differ, too few
+///   correspondences for the solver, non-finite coordinates, negative or non-finite weights.
+/// - Geometrically degenerate configurations return std::nullopt (documented empty result):
+///   fewer than the minimal number of correspondences with positive weight, all points of one
+///   image coincident, or a solution that is not unique (collinear points, rank-deficient data).
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+#include "gimm/core/rng.hpp"
+#include "gimm/geometry/epipolar.hpp"
+
+namespace gimm {
+
+template <class Scalar>
+using Points2 = Eigen::Matrix<Scalar, 2, Eigen::Dynamic>;
+template <class Scalar>
+using VectorX = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+
+namespace detail {
+
+/// Validates correspondences and weights; returns the number with positive weight.
+template <class Scalar>
+Eigen::Index check_correspondences(const char* who, const Points2<Scalar>& x_a,
+                                   const Points2<Scalar>& x_b, const VectorX<Scalar>* weights,
+                                   Eigen::Index minimal) {
+  GIMM_CHECK(x_a.cols() == x_b.cols(),
+             who << ": x_a has " << x_a.cols() << " points but x_b has " << x_b.cols());
+  GIMM_CHECK(x_a.cols() >= minimal,
+             who << ": need at least " << minimal << " correspondences, got " << x_a.cols());
+  for (Eigen::Index i = 0; i < x_a.cols(); ++i)
+    GIMM_CHECK(x_a.col(i).allFinite() && x_b.col(i).allFinite(),
+               who << ": correspondence " << i << " has a non-finite coordinate (x_a = "
+                   << x_a.col(i).transpose() << ", x_b = " << x_b.col(i).transpose() << ")");
+  if (weights == nullptr) return x_a.cols();
+  GIMM_CHECK(weights->size() == x_a.cols(),
+             who << ": " << weights->size() << " weights for " << x_a.cols() << " points");
+  Eigen::Index positive = 0;
+  for (Eigen::Index i = 0; i < weights->size(); ++i) {
+    const Scalar w = (*weights)(i);
+    GIMM_CHECK(std::isfinite(w) && w >= 0,
+               who << ": weight " << i << " must be finite and >= 0, got " << w);
+    positive += w > 0;
+  }
+  return positive;
+}
+
+/// The paper's normalisation: weighted centroid mu, weighted mean distance d to it,
+/// s = sqrt(2) / d, T = [[s, 0, -s mu_x], [0, s, -s mu_y], [0, 0, 1]].
+/// Returns nullopt when all weighted points coincide (d = 0).
+template <class Scalar>
+std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
+                                                      const VectorX<Scalar>& w) {
+  const Scalar total = w.sum();
+  const Eigen::Matrix<Scalar, 2, 1> mu = (x * w) / total;
+  const Scalar d = ((x.colwise() - mu).colwise().norm() * w)(0) / total;
+  if (!(d > std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + mu.norm()))) return std::nullopt;
+  const Scalar s = std::sqrt(Scalar(2)) / d;
+  Matrix3<Scalar> T;
+  T << s, 0, -s * mu.x(),  //
+      0, s, -s * mu.y(),   //
+      0, 0, 1;
+  return T;
+}
+
+/// Smallest eigenvector of a symmetric PSD matrix, or nullopt when the smallest eigenvalue is
+/// not isolated (second-smallest below `rel_tol` times the largest): the solution is not unique.
+template <class Scalar, int N>
+std::optional<Eigen::Matrix<Scalar, N, 1>> unique_null_vector(const Eigen::Matrix<Scalar, N, N>& M,
+                                                              Scalar rel_tol) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, N, N>> eig(M);
+  if (eig.info() != Eigen::Success) return std::nullopt;
+  const auto& lambda = eig.eigenvalues();  // ascending
+  if (!(lambda(N - 1) > 0) || !(lambda(1) > rel_tol * lambda(N - 1))) return std::nullopt;
+  return eig.eigenvectors().col(0);
+}
+
+template <class Scalar>
+Matrix3<Scalar> enforce_rank2(const Matrix3<Scalar>& F) {
+  Eigen::JacobiSVD<Matrix3<Scalar>> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix<Scalar, 3, 1> sigma = svd.singularValues();
+  sigma(2) = 0;
+  return svd.matrixU() * sigma.asDiagonal() * svd.matrixV().transpose();
+}
+
+/// Tolerance on the eigenvalue ratio for "unique solution": eigenvalues are squared singular
+/// values, so 1e3 eps ~ a singular-value ratio of sqrt(1e3 eps) (5e-7 in double).
+template <class Scalar>
+Scalar uniqueness_tolerance() {
+  return Scalar(1000) * std::numeric_limits<Scalar>::epsilon();
+}
+
+}  // namespace detail
+
+/// The paper's weighted normalised 8-point algorithm (gimm-paper.tex, Sec. "Epipolar Geometry
+/// Module"): rows a_i = [x'x, x'y, x', y'x, y'y, y', x, y, 1] on normalised points (x = x_a,
+/// x' = x_b), minimise ||W A f||^2 with W = diag(sqrt(w_i)) (the eigenvector of A^T W^2 A with
+/// the smallest eigenvalue), enforce rank 2 by SVD, denormalise F = T_b^T F~ T_a.
+/// f is F in row-major order, which is what the rows a_i pair with (the paper's "column-wise"
+/// wording notwithstanding).
+/// x_a, x_b: (2, N) pixels; weights: (N) >= 0, or empty for all ones.
+/// Returns the normalised F, or nullopt for a degenerate configuration (see the file comment).
+template <class Scalar>
+std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
+                                               const Points2<Scalar>& x_b,
+                                               const VectorX<Scalar>& weights = {}) {
+  const bool weighted = weights.size() > 0;
+  const Eigen::Index n = x_a.cols();
+  const Eigen::Index positive = detail::check_correspondences<Scalar>(
+      "fundamental_8pt", x_a, x_b, weighted ? &weights : nullptr, 8);
+  if (positive < 8) return std::nullopt;
+  const VectorX<Scalar> w = weighted ? weights : VectorX<Scalar>::Ones(n);
+
+  const auto Ta = detail::weighted_normalization<Scalar>(x_a, w);
+  const auto Tb = detail::weighted_normalization<Scalar>(x_b, w);
+  if (!Ta || !Tb) return std::nullopt;
+
+  // Rows sqrt(w_i) a_i; M = A^T W^2 A accumulated as one (9, N) x (N, 9) product.
+  Eigen::Matrix<Scalar, 9, Eigen::Dynamic> At(9, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Scalar sa = (*Ta)(0, 0), sb = (*Tb)(0, 0);
+    const Scalar xa = sa * x_a(0, i) + (*Ta)(0, 2), ya = sa * x_a(1, i) + (*Ta)(1, 2);
+    const Scalar xb = sb * x_b(0, i) + (*Tb)(0, 2), yb = sb * x_b(1, i) + (*Tb)(1, 2);
+    const Scalar r = std::sqrt(w(i));
+    At.col(i) << r * xb * xa, r * xb * ya, r * xb, r * yb * xa, r * yb * ya, r * yb, r * xa, r * ya,
+        r;
+  }
+  Eigen::Matrix<Scalar, 9, 9> M = Eigen::Matrix<Scalar, 9, 9>::Zero();
+  M.template selfadjointView<Eigen::Lower>().rankUpdate(At);
+  M = M.template selfadjointView<Eigen::Lower>();
+  const auto f = detail::unique_null_vector<Scalar, 9>(M, detail::uniqueness_tolerance<Scalar>());
+  if (!f) return std::nullopt;
+  const Matrix3<Scalar> F_normalised = detail::enforce_rank2<Scalar>(
+      Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(f->data()));
+  const Matrix3<Scalar> F = Tb->transpose() * F_normalised * (*Ta);
+  if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
+  return normalize_fundamental(F);
+}
+
+/// Affine fundamental matrix F = [[0, 0, a], [0, 0, b], [c, d, e]] of two orthographic views:
+/// a x_b + b y_b + c x_a + d y_a + e = 0. Gold Standard: (a, b, c, d) is the direction of least
+/// weighted variance of the 4D points (x_b, y_b, x_a, y_a) and e = -(a, b, c, d) . centroid,
+/// which minimises the weighted sum of squared geometric distances. Needs >= 4 points.
+/// Returns nullopt for degenerate configurations (fewer than 4 positive weights, solution not
+/// unique, or a constraint that does not involve both images).
+template <class Scalar>
+std::optional<Matrix3<Scalar>> fundamental_affine(const Points2<Scalar>& x_a,
+                                                  const Points2<Scalar>& x_b,
+                                                  const VectorX<Scalar>& weights = {}) {
+  const bool weighted = weights.size() > 0;
+  const Eigen::Index n = x_a.cols();
+  const Eigen::Index positive = detail::check_correspondences<Scalar>(
+      "fundamental_affine", x_a, x_b, weighted ? &weights : nullptr, 4);
+  if (positive < 4) return std::nullopt;
+  const VectorX<Scalar> w = weighted ? weights : VectorX<Scalar>::Ones(n);
+
+  Eigen::Matrix<Scalar, 4, Eigen::Dynamic> q(4, n);
+  q << x_b, x_a;
+  const Eigen::Matrix<Scalar, 4, 1> mu = q * w / w.sum();
+  const Eigen::Matrix<Scalar, 4, Eigen::Dynamic> centred =
+      (q.colwise() - mu) * w.cwiseSqrt().asDiagonal();
+  const Eigen::Matrix<Scalar, 4, 4> cov = centred * centred.transpose();
+  const auto nvec =
+      detail::unique_null_vector<Scalar, 4>(cov, detail::uniqueness_tolerance<Scalar>());
+  if (!nvec) return std::nullopt;
+  const auto& v = *nvec;
+  // A constraint on one image alone (all x_b on a line, say) is no epipolar geometry.
+  const Scalar eps = Scalar(1e-9);
+  if (std::hypot(v(0), v(1)) < eps || std::hypot(v(2), v(3)) < eps) return std::nullopt;
+  Matrix3<Scalar> F = Matrix3<Scalar>::Zero();
+  F(0, 2) = v(0);
+  F(1, 2) = v(1);
+  F(2, 0) = v(2);
+  F(2, 1) = v(3);
+  F(2, 2) = -v.dot(mu);
+  return normalize_fundamental(F);
+}
+
+enum class FundamentalModel { perspective, affine };
+enum class EpipolarDistance { sampson, symmetric };
+
+/// Options of estimate_fundamental_ransac. Units: pixels.
+struct RansacOptions {
+  FundamentalModel model = FundamentalModel::perspective;  ///< 8-point or affine minimal solver
+  EpipolarDistance distance = EpipolarDistance::sampson;   ///< residual used for inliers
+  double threshold_px = 1.0;  ///< inlier if sqrt(distance_sq) <= threshold_px
+  double confidence = 0.999;  ///< stop when P(all samples so far contaminated) < 1 - confidence
+  std::int64_t max_iterations = 10000;
+  std::int64_t min_iterations = 10;
+  int local_optimization_steps = 3;  ///< refits on inliers after each new best (0 = plain MSAC)
+  std::uint64_t seed = 0;            ///< same seed, same result
+};
+
+struct RansacStats {
+  std::int64_t iterations = 0;
+  std::int64_t degenerate_samples = 0;
+  std::int64_t local_optimizations = 0;
+  std::int64_t num_inliers = 0;
+  double inlier_ratio = 0.0;
+  double score = std::numeric_limits<double>::infinity();  ///< MSAC cost (px^2), lower is better
+};
+
+template <class Scalar>
+struct RansacResult {
+  std::optional<Matrix3<Scalar>> F;  ///< nullopt if no non-degenerate model was found
+  std::vector<char> inliers;         ///< (N) 1 for inliers of F
+  RansacStats stats;
+};
+
+/// Robust F by MSAC (Torr & Zisserman 2000) with local optimisation (Chum et al. 2003): random
+/// minimal samples (8 for perspective, 4 for affine), truncated-quadratic cost, and each new
+/// best model refit on its inliers by the (unweighted) least-squares solver. The returned F is
+/// the final refit on all inliers. Deterministic for a given seed.
+template <class Scalar>
+RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
+                                                 const Points2<Scalar>& x_b,
+                                                 const RansacOptions& options = {}) {
+  const bool affine = options.model == FundamentalModel::affine;
+  const Eigen::Index minimal = affine ? 4 : 8;
+  detail::check_correspondences<Scalar>("estimate_fundamental_ransac", x_a, x_b, nullptr, minimal);
+  GIMM_CHECK(std::isfinite(options.threshold_px) && options.threshold_px > 0,
+             "estimate_fundamental_ransac: threshold_px must be > 0, got " << options.threshold_px);
+  GIMM_CHECK(
+      options.confidence > 0 && options.confidence < 1,
+      "estimate_fundamental_ransac: confidence must be in (0, 1), got " << options.confidence);
+  GIMM_CHECK(options.max_iterations >= 1 && options.min_iterations >= 0,
+             "estimate_fundamental_ransac: need max_iterations >= 1 and min_iterations >= 0");
+
+  const Eigen::Index n = x_a.cols();
+  const double thr_sq = options.threshold_px * options.threshold_px;
+  auto solve = [&](const Points2<Scalar>& a, const Points2<Scalar>& b) {
+    return affine ? fundamental_affine<Scalar>(a, b) : fundamental_8pt<Scalar>(a, b);
+  };
+  auto residual_sq = [&](const Matrix3<Scalar>& F, Eigen::Index i) -> double {
+    const Eigen::Matrix<Scalar, 2, 1> a = x_a.col(i), b = x_b.col(i);
+    return options.distance == EpipolarDistance::sampson
+               ? static_cast<double>(sampson_distance_sq<Scalar>(F, a, b))
+               : static_cast<double>(symmetric_epipolar_distance_sq<Scalar>(F, a, b));
+  };
+  auto score = [&](const Matrix3<Scalar>& F, std::vector<char>& mask) {
+    double cost = 0;
+    std::int64_t count = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double r = residual_sq(F, i);
+      const bool inlier = r <= thr_sq;
+      mask[static_cast<std::size_t>(i)] = inlier;
+      count += inlier;
+      cost += inlier ? r : thr_sq;
+    }
+    return std::make_pair(cost, count);
+  };
+  auto refit = [&](const std::vector<char>& mask) -> std::optional<Matrix3<Scalar>> {
+    std::vector<Eigen::Index> idx;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (mask[static_cast<std::size_t>(i)]) idx.push_back(i);
+    if (static_cast<Eigen::Index>(idx.size()) < minimal) return std::nullopt;
+    Points2<Scalar> a(2, idx.size()), b(2, idx.size());
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      a.col(k) = x_a.col(idx[k]);
+      b.col(k) = x_b.col(idx[k]);
+    }
+    return solve(a, b);
+  };
+
+  RansacResult<Scalar> result;
+  result.inliers.assign(static_cast<std::size_t>(n), 0);
+  std::vector<char> mask(static_cast<std::size_t>(n), 0);
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  Points2<Scalar> sample_a(2, minimal), sample_b(2, minimal);
+  Rng rng(options.seed);
+  std::int64_t needed = options.max_iterations;
+
+  auto consider = [&](const Matrix3<Scalar>& F) {
+    const auto [cost, count] = score(F, mask);
+    if (cost >= result.stats.score) return false;
+    result.F = F;
+    result.inliers = mask;
+    result.stats.score = cost;
+    result.stats.num_inliers = count;
+    return true;
+  };
+
+  for (std::int64_t it = 0; it < std::min(needed, options.max_iterations); ++it) {
+    ++result.stats.iterations;
+    for (Eigen::Index k = 0; k < minimal; ++k) {  // partial Fisher-Yates: distinct indices
+      const auto j = k + static_cast<Eigen::Index>(rng.below(static_cast<std::uint64_t>(n - k)));
+      std::swap(order[static_cast<std::size_t>(k)], order[static_cast<std::size_t>(j)]);
+      sample_a.col(k) = x_a.col(order[static_cast<std::size_t>(k)]);
+      sample_b.col(k) = x_b.col(order[static_cast<std::size_t>(k)]);
+    }
+    const auto F = solve(sample_a, sample_b);
+    if (!F) {
+      ++result.stats.degenerate_samples;
+      continue;
+    }
+    if (!consider(*F)) continue;
+    for (int step = 0; step < options.local_optimization_steps; ++step) {
+      const auto refined = refit(result.inliers);
+      ++result.stats.local_optimizations;
+      if (!refined || !consider(*refined)) break;
+    }
+    const double ratio = static_cast<double>(result.stats.num_inliers) / static_cast<double>(n);
+    const double p_good_sample = std::pow(ratio, static_cast<double>(minimal));
+    if (p_good_sample >= 1.0) {
+      needed = options.min_iterations;
+    } else if (p_good_sample > 0) {
+      needed = std::max<std::int64_t>(
+          options.min_iterations,
+          static_cast<std::int64_t>(
+              std::ceil(std::log(1 - options.confidence) / std::log1p(-p_good_sample))));
+    }
+  }
+  if (result.F) {  // final least-squares refit on all inliers, kept only if it scores no worse
+    if (const auto refined = refit(result.inliers)) consider(*refined);
+  }
+  result.stats.inlier_ratio =
+      static_cast<double>(result.stats.num_inliers) / static_cast<double>(n);
+  return result;
+}
+
+}  // namespace gimm

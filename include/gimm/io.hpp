@@ -1,0 +1,3 @@
+#pragma once
+/// The io room (target gimm::io): JSON records, NIfTI, PNG, NPY.
+#include "gimm/io/camera_json.hpp"

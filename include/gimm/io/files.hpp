@@ -1,0 +1,75 @@
+#pragma once
+/// Whole-file reads and atomic writes.
+///
+/// write_file_atomic writes to "<path>.tmp.<pid>" in the same directory, flushes, and renames
+/// over `path`, so a reader (or a run killed at any moment) sees either the old file or the
+/// complete new one, never a half-written file. Errors name the file and the OS reason.
+#include <unistd.h>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+
+namespace gimm {
+
+inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  GIMM_CHECK_AS(IoError, in, "cannot open '" << path.string() << "': " << std::strerror(errno));
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+  GIMM_CHECK_AS(IoError, !in.bad(), "error reading '" << path.string() << "'");
+  return bytes;
+}
+
+inline void write_file_atomic(const std::filesystem::path& path, const void* data,
+                              std::size_t size) {
+  const std::filesystem::path tmp =
+      path.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
+  {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    GIMM_CHECK_AS(IoError, f != nullptr,
+                  "cannot write '" << path.string() << "': " << std::strerror(errno));
+    const bool ok = std::fwrite(data, 1, size, f) == size && std::fflush(f) == 0;
+    const int saved_errno = errno;
+    const bool closed = std::fclose(f) == 0;
+    if (!ok || !closed) {
+      std::remove(tmp.c_str());
+      GIMM_FAIL("error writing '" << path.string() << "': " << std::strerror(saved_errno));
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::remove(tmp.c_str());
+    GIMM_FAIL("cannot move '" << tmp.string() << "' to '" << path.string()
+                              << "': " << ec.message());
+  }
+}
+
+inline void write_file_atomic(const std::filesystem::path& path, const std::string& text) {
+  write_file_atomic(path, text.data(), text.size());
+}
+
+/// Parses a JSON file; errors name the file and the parse position.
+inline nlohmann::json read_json_file(const std::filesystem::path& path) {
+  const auto bytes = read_file_bytes(path);
+  try {
+    return nlohmann::json::parse(bytes.begin(), bytes.end());
+  } catch (const nlohmann::json::parse_error& e) {
+    throw FormatError("gimm: '" + path.string() + "' is not valid JSON: " + e.what());
+  }
+}
+
+/// Writes JSON (indented by `indent`, -1 for compact) atomically, with a final newline.
+inline void write_json_file(const std::filesystem::path& path, const nlohmann::json& j,
+                            int indent = 1) {
+  write_file_atomic(path, j.dump(indent) + "\n");
+}
+
+}  // namespace gimm

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian packages gimm needs, and only those that are missing.
+# Idempotent: a second run installs nothing and does not touch apt's lists.
+#
+#   scripts/install-deps.sh            build + tests + examples (the default)
+#   scripts/install-deps.sh bench      + side-by-side anchors (plastimatch, OpenCV, gnuplot)
+#   scripts/install-deps.sh train      + PyTorch and NumPy for tools/train
+#   scripts/install-deps.sh all        everything
+set -euo pipefail
+
+core=(build-essential cmake pkg-config git libeigen3-dev libglm-dev libembree-dev
+      nlohmann-json3-dev catch2 libbenchmark-dev libcli11-dev zlib1g-dev libpng-dev
+      clang-format gnuplot-nox)
+bench=(plastimatch libopencv-dev python3-opencv python3-numpy hyperfine)
+train=(python3-torch)
+
+wanted=("${core[@]}")
+for group in "$@"; do
+  case "$group" in
+    core) ;;
+    bench) wanted+=("${bench[@]}") ;;
+    train) wanted+=("${train[@]}") ;;
+    all) wanted+=("${bench[@]}" "${train[@]}") ;;
+    *) echo "error: install-deps.sh: unknown group '$group' (core|bench|train|all)" >&2; exit 2 ;;
+  esac
+done
+
+missing=()
+for pkg in "${wanted[@]}"; do
+  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#wanted[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
