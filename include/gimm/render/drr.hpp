@@ -44,16 +44,25 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
   GIMM_CHECK(std::isfinite(step), "render: step must be finite, got " << options.step_mm);
   Image<float> out(camera.rows(), camera.cols(), 0.0f);
   const RayGenerator rays(camera);
-  const VolumeGeometry& geometry = mu.geometry();
+  const IndexSpace to_index(mu.geometry());
   const int cols = camera.cols();
   parallel_for_dynamic(0, camera.rows(), 4, [&](std::int64_t row) {
     float* line = out.data() + row * cols;
-    for (int col = 0; col < cols; ++col) {
-      const IndexRay ray = to_index_ray(geometry, rays(col, static_cast<double>(row)));
-      const double value = options.projector == Projector::siddon
-                               ? siddon_integral(mu, ray)
-                               : trilinear_integral(mu, ray, step);
-      line[col] = static_cast<float>(value);
+    const double v = static_cast<double>(row);
+    int col = 0;
+    if (options.projector == Projector::siddon) {
+      for (; col + 1 < cols; col += 2) {  // two rays interleaved (siddon_integral_pair)
+        double a = 0, b = 0;
+        siddon_integral_pair(mu, to_index(rays(col, v)), to_index(rays(col + 1, v)), a, b);
+        line[col] = static_cast<float>(a);
+        line[col + 1] = static_cast<float>(b);
+      }
+    }
+    for (; col < cols; ++col) {
+      const IndexRay ray = to_index(rays(col, v));
+      line[col] = static_cast<float>(options.projector == Projector::siddon
+                                         ? siddon_integral(mu, ray)
+                                         : trilinear_integral(mu, ray, step));
     }
   });
   return out;

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 #include <limits>
 
@@ -23,12 +24,25 @@ struct IndexRay {
   glm::dvec3 direction;  ///< index units per world mm
 };
 
+/// Maps world rays into one volume's index space (the matrix A^-1 computed once).
+class IndexSpace {
+ public:
+  explicit IndexSpace(const VolumeGeometry& geometry)
+      : inverse_(geometry.spacing.cwiseInverse().asDiagonal() * geometry.direction.transpose()),
+        origin_(geometry.origin) {}
+  IndexRay operator()(const Ray<double>& ray) const {
+    const Eigen::Vector3d o = inverse_ * (ray.origin - origin_);
+    const Eigen::Vector3d d = inverse_ * ray.direction;
+    return {glm::dvec3(o.x(), o.y(), o.z()), glm::dvec3(d.x(), d.y(), d.z())};
+  }
+
+ private:
+  Eigen::Matrix3d inverse_;
+  Eigen::Vector3d origin_;
+};
+
 inline IndexRay to_index_ray(const VolumeGeometry& geometry, const Ray<double>& ray) {
-  const Eigen::Matrix3d inv =
-      geometry.spacing.cwiseInverse().asDiagonal() * geometry.direction.transpose();
-  const Eigen::Vector3d o = inv * (ray.origin - geometry.origin);
-  const Eigen::Vector3d d = inv * ray.direction;
-  return {glm::dvec3(o.x(), o.y(), o.z()), glm::dvec3(d.x(), d.y(), d.z())};
+  return IndexSpace(geometry)(ray);
 }
 
 /// Parameter interval [s_enter, s_exit] where the ray lies in the box lo <= p <= hi, restricted
