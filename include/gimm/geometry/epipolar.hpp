@@ -6,6 +6,7 @@
 /// named ..._sq return squared pixels. F is defined up to scale; functions returning F
 /// normalise it to unit Frobenius norm with its largest-magnitude entry positive.
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 #include <limits>
@@ -42,20 +43,30 @@ Matrix3<typename Derived::Scalar> normalize_fundamental(const Eigen::MatrixBase<
 /// F from two cameras (Hartley & Zisserman, eq. 9.1): F = [e_b]_x P_b P_a^+, with
 /// e_b = P_b C_a the epipole in B and C_a the homogeneous centre of A (a point at infinity for an
 /// orthographic camera, which makes F affine: its top-left 2x2 block is zero when both
-/// cameras are orthographic). P_a^+ = P_a^T (P_a P_a^T)^-1.
+/// cameras are orthographic).
+/// Evaluated on the calibrated cameras K^-1 P (entries near 1 and the source distance, instead
+/// of the focal length squared) with P_a^+ from a QR factorisation, then mapped back:
+/// F = K_b^-T F' K_a^-1. Forming P_a P_a^T directly squares a condition number of ~1e6 and
+/// leaves epipolar residuals of 1e-6 px; this way they are ~1e-13 px.
 /// Throws if the two centres coincide (no baseline: F is undefined).
 template <class Scalar>
 Matrix3<Scalar> fundamental_from_cameras(const Camera<Scalar>& a, const Camera<Scalar>& b) {
   using Mat34 = Eigen::Matrix<Scalar, 3, 4>;
-  const Mat34 Pa = a.P();
-  const Mat34 Pb = b.P();
+  const Mat34 Pa = a.K().inverse() * a.P();
+  const Mat34 Pb = b.K().inverse() * b.P();
   const Eigen::Matrix<Scalar, 3, 1> e_b = Pb * a.center_homogeneous();
-  const Eigen::Matrix<Scalar, 4, 3> Pa_pinv = Pa.transpose() * (Pa * Pa.transpose()).inverse();
-  const Matrix3<Scalar> F = skew(e_b) * Pb * Pa_pinv;
-  GIMM_CHECK(F.allFinite() && F.norm() > Scalar(1e-12) * Pb.norm() * Pa_pinv.norm(),
-             "fundamental_from_cameras: the two cameras share their centre (or viewing "
-             "direction, if orthographic); F is undefined");
-  return normalize_fundamental(F);
+  // P_a^T = Q R  =>  P_a^+ = P_a^T (P_a P_a^T)^-1 = Q R^-T.
+  const Eigen::HouseholderQR<Eigen::Matrix<Scalar, 4, 3>> qr(Pa.transpose());
+  const Eigen::Matrix<Scalar, 4, 3> Q = qr.householderQ() * Eigen::Matrix<Scalar, 4, 3>::Identity();
+  const Matrix3<Scalar> R_upper =
+      qr.matrixQR().template topRows<3>().template triangularView<Eigen::Upper>();
+  const Eigen::Matrix<Scalar, 4, 3> Pa_pinv = Q * R_upper.transpose().inverse();
+  const Matrix3<Scalar> F_calibrated = skew(e_b) * Pb * Pa_pinv;
+  GIMM_CHECK(
+      F_calibrated.allFinite() && F_calibrated.norm() > Scalar(1e-9) * Pb.norm() * Pa_pinv.norm(),
+      "fundamental_from_cameras: the two cameras share their centre (or viewing "
+      "direction, if orthographic); F is undefined");
+  return normalize_fundamental(b.K().inverse().transpose() * F_calibrated * a.K().inverse());
 }
 
 /// Epipolar line in B of x_a: l_b = F x_a (a, b, c with a u + b v + c = 0).
