@@ -10,8 +10,8 @@ set -euo pipefail
 
 core=(build-essential cmake pkg-config git libeigen3-dev libglm-dev libembree-dev
       nlohmann-json3-dev catch2 libbenchmark-dev libcli11-dev zlib1g-dev libpng-dev
-      clang-format gnuplot-nox)
-bench=(plastimatch libopencv-dev python3-opencv python3-numpy hyperfine)
+      clang-format gnuplot-nox python3-numpy python3-nibabel)
+bench=(plastimatch libopencv-dev python3-opencv hyperfine)
 train=(python3-torch)
 
 wanted=("${core[@]}")

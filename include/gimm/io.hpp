@@ -1,3 +1,8 @@
 #pragma once
-/// The io room (target gimm::io): JSON records, NIfTI, PNG, NPY.
+/// The io room (target gimm::io): JSON records, NIfTI volumes, PNG and NPY images.
 #include "gimm/io/camera_json.hpp"
+#include "gimm/io/files.hpp"
+#include "gimm/io/gzip.hpp"
+#include "gimm/io/nifti.hpp"
+#include "gimm/io/npy.hpp"
+#include "gimm/io/png.hpp"
