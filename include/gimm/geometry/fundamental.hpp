@@ -256,10 +256,13 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
                ? static_cast<double>(sampson_distance_sq<Scalar>(F, a, b))
                : static_cast<double>(symmetric_epipolar_distance_sq<Scalar>(F, a, b));
   };
-  auto score = [&](const Matrix3<Scalar>& F, std::vector<char>& mask) {
+  // MSAC cost and inliers of F. The cost only grows, so scoring stops once it reaches `bound`
+  // (the best score so far): such a model cannot win and its mask is never used. Same result
+  // as scoring every point, in less time.
+  auto score = [&](const Matrix3<Scalar>& F, std::vector<char>& mask, double bound) {
     double cost = 0;
     std::int64_t count = 0;
-    for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index i = 0; i < n && cost < bound; ++i) {
       const double r = residual_sq(F, i);
       const bool inlier = r <= thr_sq;
       mask[static_cast<std::size_t>(i)] = inlier;
@@ -291,7 +294,7 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   std::int64_t needed = options.max_iterations;
 
   auto consider = [&](const Matrix3<Scalar>& F) {
-    const auto [cost, count] = score(F, mask);
+    const auto [cost, count] = score(F, mask, result.stats.score);
     if (cost >= result.stats.score) return false;
     result.F = F;
     result.inliers = mask;
