@@ -135,4 +135,12 @@ class Volume {
   std::vector<T> data_;
 };
 
+/// Element-wise conversion to another voxel type on the same grid (static_cast per voxel).
+template <class To, class From>
+Volume<To> volume_cast(const Volume<From>& in) {
+  Volume<To> out(in.geometry());
+  for (std::size_t n = 0; n < in.size(); ++n) out.data()[n] = static_cast<To>(in.data()[n]);
+  return out;
+}
+
 }  // namespace gimm

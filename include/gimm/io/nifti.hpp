@@ -353,7 +353,7 @@ Volume<T> read_nifti(const std::filesystem::path& path) {
 /// renamed into place). Output bytes depend only on the volume (no timestamps).
 template <class T>
 void write_nifti(const std::filesystem::path& path, const Volume<T>& volume,
-                 const std::string& description = "gimm", int gzip_level = 6) {
+                 const std::string& description = "gimm", int gzip_level = 1) {
   constexpr int datatype = detail::nifti_datatype_of<T>();
   static_assert(datatype != 0, "write_nifti: unsupported voxel type");
   const VolumeGeometry& g = volume.geometry();
