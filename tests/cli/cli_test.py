@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""End-to-end checks of the example binaries: good runs, bad input, and NIfTI orientation
+against nibabel (an independent reader and writer).
+
+Usage: cli_test.py BIN_DIR TMP_DIR
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import nibabel as nib
+import numpy as np
+
+BIN, TMP = sys.argv[1], sys.argv[2]
+failures = []
+
+
+def run(*args, ok=True, contains=None):
+    proc = subprocess.run([os.path.join(BIN, args[0]), *map(str, args[1:])],
+                          capture_output=True, text=True)
+    out = proc.stdout + proc.stderr
+    if ok and proc.returncode != 0:
+        failures.append(f"{args}: exit {proc.returncode}: {out[-500:]}")
+    if not ok and proc.returncode == 0:
+        failures.append(f"{args}: expected failure, got exit 0")
+    if contains and contains not in out:
+        failures.append(f"{args}: output lacks {contains!r}: {out[-500:]}")
+    return proc.stdout
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+
+
+shutil.rmtree(TMP, ignore_errors=True)
+os.makedirs(TMP)
+
+# gimm-carm: JSON fields, conventions, bad flags.
+cam = json.loads(run("gimm-carm", "--primary", 30, "--secondary", 20))
+for key in ["P", "K", "R", "t", "center", "image_size", "model", "primary_deg", "secondary_deg",
+            "sid_mm", "sod_mm", "pixel_mm"]:
+    check(key in cam, f"gimm-carm JSON lacks {key}")
+check(cam["center"][0] < 0, "LAO 30 must put the source on the patient's right (x < 0)")
+check(cam["center"][2] < 0, "cranial 20 must put the source towards the feet (z < 0)")
+check(len(json.loads(run("gimm-carm", "--routine"))) == 11, "--routine prints 11 views")
+run("gimm-carm", "--primary", 30, "--bogus", ok=False, contains="--bogus")
+run("gimm-carm", "--primary", 30, "--secondary", 0, "--sid", -5, ok=False, contains="-5")
+run("gimm-carm", "--primary", 30, "--secondary", 0, "--model", "fisheye", ok=False,
+    contains="fisheye")
+
+# gimm-phantom writes ImageCAS-form files that nibabel reads with the expected RAS affine.
+ph = os.path.join(TMP, "ph")
+run("gimm-phantom", "--seed", 3, "--out", ph)
+img = nib.load(os.path.join(ph, "3.img.nii.gz"))
+lab = nib.load(os.path.join(ph, "3.label.nii.gz"))
+check(img.shape == (128, 128, 64), f"phantom shape {img.shape}")
+check(img.get_data_dtype() == np.int16 and lab.get_data_dtype() == np.uint8, "phantom dtypes")
+check(np.allclose(img.affine[:3, :3], np.diag([-1.6, -1.6, 2.0]), atol=1e-6),
+      f"phantom affine (RAS) {img.affine}")
+check(np.allclose(img.affine, img.get_qform(), atol=1e-4), "qform equals sform")
+# Every centerline point (LPS mm) lands, through nibabel's affine, in a labelled voxel.
+tree = json.load(open(os.path.join(ph, "3.centerlines.json")))
+label = np.asarray(lab.dataobj)
+inv = np.linalg.inv(lab.affine)
+missed = total = 0
+for br in tree["branches"]:
+    for p in br["points"]:
+        ras = np.array([-p[0], -p[1], p[2], 1.0])
+        ijk = np.rint(inv @ ras)[:3].astype(int)
+        total += 1
+        missed += label[tuple(ijk)] != 1
+check(total > 500 and missed == 0, f"{missed}/{total} centerline points outside the label")
+check(set(np.unique(label)) == {0, 1}, "label values")
+
+# gimm-drr: outputs, formats, and bad input that leaves nothing behind.
+out = os.path.join(TMP, "drr_lao")
+run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--label",
+    os.path.join(ph, "3.label.nii.gz"), "--system", "LCA", "--primary", 45, "--secondary", 25,
+    "--rows", 128, "--cols", 160, "--pixel", 1.5, "--out", out, "--quiet")
+arr = np.load(out + ".npy")
+check(arr.shape == (128, 160) and arr.dtype == np.float32, f"npy {arr.shape} {arr.dtype}")
+png = open(out + ".png", "rb").read()
+check(png[:8] == b"\x89PNG\r\n\x1a\n" and png[24] == 16, "16-bit PNG")
+camj = json.load(open(out + ".camera.json"))
+check(camj["image_size"] == [128, 160] or camj["image_size"] == {"rows": 128, "cols": 160}
+      or camj["image_size"] == [160, 128], f"camera image_size {camj['image_size']}")
+
+bad = os.path.join(TMP, "bad.nii.gz")
+open(bad, "wb").write(open(os.path.join(ph, "3.img.nii.gz"), "rb").read()[:5000])
+prefix = os.path.join(TMP, "never")
+run("gimm-drr", "--volume", bad, "--primary", 0, "--secondary", 0, "--out", prefix, ok=False,
+    contains="bad.nii.gz")
+check(not any(f.startswith("never") for f in os.listdir(TMP)), "failed run left files behind")
+run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--label",
+    os.path.join(ph, "3.label.nii.gz"), "--primary", 0, "--secondary", 0, "--out", prefix,
+    ok=False, contains="--system")
+run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--primary", 0, "--secondary", 0,
+    "--out", os.path.join(TMP, "no_dir", "x"), ok=False, contains="no_dir")
+run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--primary", 0, "--secondary", 0,
+    "--projector", "cone", "--out", prefix, ok=False, contains="cone")
+other = np.zeros((10, 10, 10), np.uint8)
+other[2:5, 2:5, 2:5] = 1
+nib.save(nib.Nifti1Image(other, np.diag([-1.6, -1.6, 2.0, 1])), os.path.join(TMP, "small.nii.gz"))
+run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--label",
+    os.path.join(TMP, "small.nii.gz"), "--system", "LCA", "--primary", 0, "--secondary", 0,
+    "--out", prefix, ok=False, contains="grid")
+
+# Orientation against nibabel: a bright voxel written by nibabel (oblique, qform only, int16
+# with scl_slope) appears in gimm's DRR where gimm's own camera matrix projects the point
+# nibabel says it is at.
+data = np.zeros((40, 36, 30), np.int16)
+data[31, 7, 21] = 1000
+theta = 0.4
+rot = np.array([[np.cos(theta), -np.sin(theta), 0], [np.sin(theta), np.cos(theta), 0], [0, 0, 1]])
+affine = np.eye(4)
+affine[:3, :3] = rot @ np.diag([2.0, 2.5, 3.0])
+affine[:3, 3] = [-30, 20, -40]
+for form in ["qform", "sform"]:
+    im = nib.Nifti1Image(data, None)
+    if form == "qform":
+        im.set_qform(affine, code=1)
+        im.set_sform(None, code=0)
+    else:
+        im.set_sform(affine, code=2)
+        im.set_qform(None, code=0)
+    im.header.set_slope_inter(0.01, 0.0)  # stored 1000 -> 10 mm^-1 ... scaled on read
+    path = os.path.join(TMP, f"marker_{form}.nii.gz")
+    nib.save(im, path)
+    world_ras = (affine @ np.array([31, 7, 21, 1.0]))[:3]
+    world_lps = world_ras * np.array([-1, -1, 1])
+    for primary, secondary in [(0, 0), (40, -25)]:
+        o = os.path.join(TMP, f"marker_{form}_{primary}")
+        run("gimm-drr", "--volume", path, "--recipe", "none", "--primary", primary,
+            "--secondary", secondary, "--rows", 200, "--cols", 200, "--pixel", 1.0,
+            "--isocenter", 0, 0, 0, "--out", o, "--quiet")
+        img2 = np.load(o + ".npy")
+        # The voxel's footprint spans several pixels: take its weighted centre.
+        vs, us = np.nonzero(img2 > 0)
+        w = img2[vs, us]
+        v, u = (vs * w).sum() / w.sum(), (us * w).sum() / w.sum()
+        P = np.array(json.load(open(o + ".camera.json"))["P"])
+        x = P @ np.append(world_lps, 1.0)
+        uv = x[:2] / x[2]
+        check(abs(u - uv[0]) <= 0.3 and abs(v - uv[1]) <= 0.3,
+              f"{form} marker at view ({primary},{secondary}): image max at (u={u}, v={v}), "
+              f"camera projects it to {uv}")
+
+if failures:
+    print("\n".join("FAIL: " + f for f in failures))
+    sys.exit(1)
+print("cli_test: all checks passed")
