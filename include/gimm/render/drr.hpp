@@ -68,6 +68,19 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
   return out;
 }
 
+/// The 2D vessel mask of a binary 3D mask (nonzero = vessel): pixels whose ray crosses at
+/// least `min_chord_mm` of mask voxels (exact Siddon chord through the voxel model).
+template <class T>
+Image<std::uint8_t> project_mask(const Volume<T>& mask, const Camerad& camera,
+                                 double min_chord_mm = 1e-6) {
+  Volume<float> unit(mask.geometry(), 0.0f);
+  for (std::size_t n = 0; n < mask.size(); ++n) unit.data()[n] = mask.data()[n] != T(0);
+  const Image<float> chord = render_line_integrals(unit, camera);
+  Image<std::uint8_t> out(camera.rows(), camera.cols(), 0);
+  for (std::size_t p = 0; p < out.size(); ++p) out.data()[p] = chord.data()[p] >= min_chord_mm;
+  return out;
+}
+
 /// Beer-Lambert: I = I0 exp(-line integral), per pixel.
 inline Image<float> beer_lambert(const Image<float>& line_integrals, double i0 = 1.0) {
   Image<float> out(line_integrals.rows(), line_integrals.cols());
