@@ -25,6 +25,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,7 +84,8 @@ struct PhantomOptions {
   std::uint64_t seed = 0;
   PhantomSize size = PhantomSize::small;
   Dominance dominance = Dominance::automatic;
-  double noise_hu = 15.0;  ///< scanner noise sigma; 0 for a noise-free volume
+  double noise_hu = 15.0;              ///< scanner noise sigma; 0 for a noise-free volume
+  std::optional<VolumeGeometry> grid;  ///< overrides `size` (any spacing, crop or direction)
 };
 
 /// The seeded anatomy (what the seed decided), recorded with the outputs.
@@ -469,7 +471,8 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   tree.validate("make_phantom");
 
   // --- Sample the grid.
-  const VolumeGeometry grid = phantom_grid(options.size);
+  const VolumeGeometry grid = options.grid ? *options.grid : phantom_grid(options.size);
+  grid.validate("make_phantom: grid");
   out.hu = Volume<std::int16_t>(grid);
   out.label = Volume<std::uint8_t>(grid, 0);
   const double lumen = A.lumen_hu, right_blood = A.lumen_hu - 80;
