@@ -1,0 +1,266 @@
+// gimm-dataset: the DRR dataset (angiograms, masks, cameras, dense 3D-2D pair labels).
+//   gimm-dataset (--input DIR | --phantom COUNT) --out DIR [--seed S] [--phantom-size
+//   small|imagecas]
+//                [--view-mode shared|per_pair] [--shard I/N] [camera flags] [--recipe R]
+//   gimm-dataset merge --out DIR        joins the shard manifests of DIR into manifest.json
+// Shards: --shard I/N, else SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT, else
+// JOB_COMPLETION_INDEX (Kubernetes Indexed Job) + GIMM_SHARD_COUNT. Patient k (in id order)
+// belongs to shard k mod N. A killed run started again skips finished patients (done.json).
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "gimm/pipeline/dataset.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Shard {
+  int index = 0, count = 1;
+  bool sharded() const { return count > 1; }
+  std::string manifest_name() const {
+    return sharded() ? "manifest.shard-" + std::to_string(index) + "-of-" + std::to_string(count) +
+                           ".json"
+                     : "manifest.json";
+  }
+};
+
+int parse_int(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  int value = 0;
+  try {
+    value = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  GIMM_CHECK(used == text.size() && !text.empty(),
+             what << " must be an integer, got '" << text << "'");
+  return value;
+}
+
+Shard resolve_shard(const std::string& flag) {
+  Shard s;
+  auto env = [](const char* name) -> std::string {
+    const char* v = std::getenv(name);
+    return v ? v : "";
+  };
+  if (!flag.empty()) {
+    const auto slash = flag.find('/');
+    GIMM_CHECK(slash != std::string::npos, "--shard must be I/N, got '" << flag << "'");
+    s.index = parse_int(flag.substr(0, slash), "--shard index");
+    s.count = parse_int(flag.substr(slash + 1), "--shard count");
+  } else if (!env("SLURM_ARRAY_TASK_ID").empty()) {
+    s.index = parse_int(env("SLURM_ARRAY_TASK_ID"), "SLURM_ARRAY_TASK_ID");
+    GIMM_CHECK(!env("SLURM_ARRAY_TASK_COUNT").empty(),
+               "SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not");
+    s.count = parse_int(env("SLURM_ARRAY_TASK_COUNT"), "SLURM_ARRAY_TASK_COUNT");
+    const std::string min = env("SLURM_ARRAY_TASK_MIN");
+    if (!min.empty()) s.index -= parse_int(min, "SLURM_ARRAY_TASK_MIN");
+  } else if (!env("JOB_COMPLETION_INDEX").empty()) {
+    s.index = parse_int(env("JOB_COMPLETION_INDEX"), "JOB_COMPLETION_INDEX");
+    GIMM_CHECK(!env("GIMM_SHARD_COUNT").empty(),
+               "JOB_COMPLETION_INDEX is set but GIMM_SHARD_COUNT is not");
+    s.count = parse_int(env("GIMM_SHARD_COUNT"), "GIMM_SHARD_COUNT");
+  }
+  GIMM_CHECK(s.count >= 1 && s.index >= 0 && s.index < s.count,
+             "shard " << s.index << "/" << s.count << " is out of range (need 0 <= I < N)");
+  return s;
+}
+
+void write_splits(const fs::path& out, const nlohmann::json& patients) {
+  fs::create_directories(out / "splits");
+  for (const char* split : {"train", "val", "test"}) {
+    std::string text;
+    for (const auto& p : patients)
+      if (p.value("status", "") == "ok" && p.value("split", "") == split)
+        text += p["id"].get<std::string>() + "\n";
+    gimm::write_file_atomic(out / "splits" / (std::string(split) + ".txt"), text);
+  }
+}
+
+/// A killed run can leave "<file>.tmp.<pid>" behind (write_file_atomic's temporaries);
+/// they are never read, and removing them makes a resumed tree equal to an uninterrupted one.
+void remove_stale_temporaries(const fs::path& out) {
+  std::vector<fs::path> stale;
+  for (const auto& e : fs::recursive_directory_iterator(out))
+    if (e.is_regular_file() && e.path().filename().string().find(".tmp.") != std::string::npos)
+      stale.push_back(e.path());
+  for (const auto& p : stale) fs::remove(p);
+}
+
+int merge(const fs::path& out) {
+  std::vector<fs::path> shards;
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("manifest.shard-", 0) == 0) shards.push_back(e.path());
+  }
+  GIMM_CHECK(!shards.empty(), "merge: no manifest.shard-*.json in '" << out.string() << "'");
+  std::sort(shards.begin(), shards.end());
+  nlohmann::json merged, patients = nlohmann::json::array();
+  int count = -1;
+  std::vector<int> seen;
+  for (const auto& path : shards) {
+    const auto m = gimm::read_json_file(path);
+    if (merged.is_null()) merged = m;
+    GIMM_CHECK(m.at("parameters") == merged.at("parameters") && m.at("input") == merged.at("input"),
+               "merge: '" << path.string() << "' was made with other parameters than '"
+                          << shards[0].string() << "'");
+    count = m.at("shard").at("count").get<int>();
+    seen.push_back(m.at("shard").at("index").get<int>());
+    for (const auto& p : m.at("patients")) patients.push_back(p);
+  }
+  std::sort(seen.begin(), seen.end());
+  for (int i = 0; i < count; ++i)
+    GIMM_CHECK(
+        std::binary_search(seen.begin(), seen.end(), i),
+        "merge: shard " << i << " of " << count << " is missing in '" << out.string() << "'");
+  std::sort(patients.begin(), patients.end(), [](const auto& a, const auto& b) {
+    return a["id"].template get<std::string>() < b["id"].template get<std::string>();
+  });
+  merged["patients"] = patients;
+  merged.erase("shard");
+  gimm::write_json_file(out / "manifest.json", merged);
+  write_splits(out, patients);
+  for (const auto& path : shards) fs::remove(path);
+  std::printf("gimm-dataset merge: %zu shards, %zu patients -> %s\n", shards.size(),
+              patients.size(), (out / "manifest.json").c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels"};
+  app.failure_message(CLI::FailureMessage::help);
+  gimm::DatasetOptions options;
+  gimm::cli::CArmFlags flags;
+  std::string input, out, shard_flag, view_mode = "shared", recipe = "angiography",
+                                      projector = "siddon", phantom_size = "small";
+  int phantom_count = 0;
+  bool quiet = false;
+  app.add_option("--input", input, "folder of ImageCAS-style N.img.nii.gz + N.label.nii.gz");
+  app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--phantom-size", phantom_size, "small|imagecas")
+      ->check(CLI::IsMember({"small", "imagecas"}))
+      ->capture_default_str();
+  app.add_option("--out", out, "output directory");
+  app.add_option("--seed", options.seed, "run seed (views, splits, sparse labels, phantoms)")
+      ->capture_default_str();
+  app.add_option("--view-mode", view_mode, "shared (11 renders) | per_pair (54 renders)")
+      ->check(CLI::IsMember({"shared", "per_pair"}))
+      ->capture_default_str();
+  app.add_option("--recipe", recipe, "reference|angiography")
+      ->check(CLI::IsMember({"reference", "angiography"}))
+      ->capture_default_str();
+  app.add_option("--projector", projector, "siddon|trilinear")
+      ->check(CLI::IsMember({"siddon", "trilinear"}))
+      ->capture_default_str();
+  app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
+  app.add_flag("--quiet", quiet, "no progress line");
+  flags.add(app, options.carm, false);
+  auto* merge_cmd = app.add_subcommand("merge", "join shard manifests into manifest.json");
+  merge_cmd->add_option("--out", out, "the dataset directory the shards wrote to")->required();
+  return gimm::cli::run(app, argc, argv, [&] {
+    if (*merge_cmd) return merge(out);
+    GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");
+    GIMM_CHECK(input.empty() != (phantom_count == 0),
+               "gimm-dataset: give exactly one of --input and --phantom");
+    flags.finish(options.carm);
+    options.view_mode = gimm::parse_view_mode(view_mode);
+    options.recipe = gimm::parse_contrast_preset(recipe);
+    options.projector = gimm::parse_projector(projector);
+    const Shard shard = resolve_shard(shard_flag);
+    std::vector<gimm::PatientSource> sources;
+    if (!input.empty()) {
+      sources = gimm::scan_imagecas_folder(input);
+    } else {
+      for (int n = 0; n < phantom_count; ++n) {
+        gimm::PatientSource s;
+        char id[32];
+        std::snprintf(id, sizeof id, "phantom-%04d", n);
+        s.id = id;
+        s.phantom_seed = options.seed * 1000003ull + static_cast<std::uint64_t>(n);
+        s.phantom_size = gimm::parse_phantom_size(phantom_size);
+        sources.push_back(s);
+      }
+    }
+    fs::create_directories(out);
+    remove_stale_temporaries(out);
+    {  // fail early, before any work, if the output is not writable
+      const fs::path probe = fs::path(out) / (".write-test." + std::to_string(::getpid()));
+      gimm::write_file_atomic(probe, std::string("ok"));
+      fs::remove(probe);
+    }
+    std::vector<const gimm::PatientSource*> mine;
+    for (std::size_t k = 0; k < sources.size(); ++k)
+      if (static_cast<int>(k % shard.count) == shard.index) mine.push_back(&sources[k]);
+
+    nlohmann::json patients = nlohmann::json::array();
+    const auto t0 = std::chrono::steady_clock::now();
+    std::size_t done = 0, failed = 0, resumed = 0;
+    for (const auto* src : mine) {
+      const fs::path done_file = fs::path(out) / "patients" / src->id / "done.json";
+      nlohmann::json record;
+      if (fs::exists(done_file)) {
+        record = gimm::read_json_file(done_file);
+        ++resumed;
+      } else {
+        try {
+          record = gimm::generate_patient(*src, options, out);
+          record.erase("seconds");
+        } catch (const std::exception& e) {
+          record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
+          ++failed;
+          std::fprintf(stderr, "\ngimm-dataset: patient %s failed: %s\n", src->id.c_str(),
+                       e.what());
+        }
+      }
+      patients.push_back(record);
+      ++done;
+      if (!quiet) {
+        const double s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double rate = done / std::max(s, 1e-9);
+        std::fprintf(stderr,
+                     "\rgimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.2f patients/s, "
+                     "ETA %.0f s   ",
+                     done, mine.size(), resumed, failed, rate,
+                     (mine.size() - done) / std::max(rate, 1e-9));
+      }
+    }
+    if (!quiet) std::fprintf(stderr, "\n");
+    nlohmann::json manifest = {
+        {"format", "gimm-dataset/1"},
+        {"parameters", options.to_json()},
+        {"input", input.empty()
+                      ? nlohmann::json{{"phantom", phantom_count}, {"phantom_size", phantom_size}}
+                      : nlohmann::json{{"folder", input}}},
+        {"patients", patients}};
+    if (shard.sharded()) {
+      manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
+    } else {
+      write_splits(out, patients);
+    }
+    gimm::write_json_file(fs::path(out) / shard.manifest_name(), manifest);
+    std::size_t views = 0, pairs = 0, labels = 0;
+    for (const auto& p : patients)
+      if (p.value("status", "") == "ok")
+        for (const auto& [name, sys] : p["systems"].items()) {
+          views += sys["views"].get<std::size_t>();
+          pairs += sys["pairs"].get<std::size_t>();
+          labels += sys["dense_labels"].get<std::size_t>();
+        }
+    std::printf(
+        "gimm-dataset: %zu patients (%zu failed): %zu views, %zu pairs, %zu dense labels -> %s\n",
+        patients.size(), failed, views, pairs, labels,
+        (fs::path(out) / shard.manifest_name()).c_str());
+    return failed == patients.size() && failed > 0 ? 1 : 0;
+  });
+}

@@ -1,0 +1,269 @@
+#pragma once
+/// The DRR dataset pipeline: CT + coronary label -> angiograms, vessel masks, cameras and
+/// dense 3D-2D pair labels, one patient at a time, resumable and shardable.
+///
+/// Layout under the output directory (docs/dataset.md):
+///   patients/<id>/centerlines.json            centerlines extracted from the label
+///   patients/<id>/views/<SYS>_<nn>.png        16-bit angiogram (Beer-Lambert, min-max)
+///   patients/<id>/views/<SYS>_<nn>.mask.png   8-bit projected vessel mask (0/255)
+///   patients/<id>/views/<SYS>_<nn>.camera.json camera, view class, angles
+///   patients/<id>/pairs/<SYS>_<nn>-<mm>.json  pair labels (dense, sparse, F, view classes)
+///   patients/<id>/done.json                   the patient's record, written last
+///   manifest.json (or manifest.shard-I-of-N.json), splits/{train,val,test}.txt
+/// Every file is written atomically and depends only on (parameters, seed, patient id), so a
+/// patient whose done.json exists is complete and is skipped on restart, and shards write
+/// disjoint patients whose union is byte-identical to one run.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gimm/anatomy/attenuation.hpp"
+#include "gimm/anatomy/components.hpp"
+#include "gimm/anatomy/phantom.hpp"
+#include "gimm/anatomy/skeleton.hpp"
+#include "gimm/geometry/carm.hpp"
+#include "gimm/io/camera_json.hpp"
+#include "gimm/io/centerlines_json.hpp"
+#include "gimm/io/files.hpp"
+#include "gimm/io/nifti.hpp"
+#include "gimm/io/png.hpp"
+#include "gimm/labels/correspondence.hpp"
+#include "gimm/labels/protocol.hpp"
+#include "gimm/render/drr.hpp"
+#include "gimm/version.hpp"
+
+namespace gimm {
+
+struct DatasetOptions {
+  std::uint64_t seed = 0;
+  ViewMode view_mode = ViewMode::shared;
+  CArm carm;  ///< detector, distances and model; angles come from the protocol
+  ContrastPreset recipe = ContrastPreset::angiography;
+  Projector projector = Projector::siddon;
+  std::size_t sparse_count = 20;
+  double split_train = 0.70, split_val = 0.15;  ///< the rest is test
+  double min_spur_mm = 3.0;
+
+  /// The detector and distances (angles and isocentre are set per view).
+  nlohmann::json carm_settings() const {
+    nlohmann::json j = gimm::to_json(carm);
+    for (const char* per_view :
+         {"P", "K", "R", "t", "center", "primary_deg", "secondary_deg", "isocenter"})
+      j.erase(per_view);
+    return j;
+  }
+
+  nlohmann::json to_json() const {
+    return {{"seed", seed},
+            {"view_mode", gimm::to_string(view_mode)},
+            {"carm", carm_settings()},
+            {"recipe", gimm::to_string(recipe)},
+            {"projector", gimm::to_string(projector)},
+            {"sparse_count", sparse_count},
+            {"split", {split_train, split_val, 1 - split_train - split_val}},
+            {"min_spur_mm", min_spur_mm},
+            {"gimm_version", GIMM_VERSION_STRING}};
+  }
+};
+
+/// One input patient: ImageCAS files, or a phantom seed.
+struct PatientSource {
+  std::string id;
+  std::filesystem::path image, label;  ///< files (empty for a phantom)
+  std::optional<std::uint64_t> phantom_seed;
+  PhantomSize phantom_size = PhantomSize::small;
+};
+
+/// ImageCAS-style folder: every N.img.nii.gz with its N.label.nii.gz, sorted by id. A missing
+/// label is kept (the patient fails with a clear error in the manifest; the run goes on).
+inline std::vector<PatientSource> scan_imagecas_folder(const std::filesystem::path& dir) {
+  GIMM_CHECK_AS(IoError, std::filesystem::is_directory(dir),
+                "input folder '" << dir.string() << "' does not exist");
+  std::vector<PatientSource> out;
+  const std::string suffix = ".img.nii.gz";
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= suffix.size() ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    PatientSource p;
+    p.id = name.substr(0, name.size() - suffix.size());
+    p.image = entry.path();
+    p.label = dir / (p.id + ".label.nii.gz");
+    out.push_back(p);
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  GIMM_CHECK(!out.empty(), "input folder '" << dir.string() << "' holds no *.img.nii.gz");
+  return out;
+}
+
+/// A stable 64-bit hash (FNV-1a) of a patient id: per-patient random streams do not depend on
+/// the order, the shard or the machine.
+inline std::uint64_t stable_hash(const std::string& s) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (const unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
+  return h;
+}
+
+/// Patient-level split: each id goes to train/val/test by a seeded hash, so the split needs
+/// no global state and is the same however the run is sharded.
+inline std::string split_of(const std::string& id, const DatasetOptions& o) {
+  Rng rng(o.seed ^ stable_hash("split:" + id));
+  const double u = rng.uniform(0, 1);
+  return u < o.split_train ? "train" : u < o.split_train + o.split_val ? "val" : "test";
+}
+
+namespace detail {
+
+inline Image<std::uint16_t> to_png16(const Image<float>& intensity) {
+  float lo = intensity.data()[0], hi = lo;
+  for (const float v : intensity.storage()) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  Image<std::uint16_t> out(intensity.rows(), intensity.cols(), 0);
+  const double scale = hi > lo ? 65535.0 / (hi - lo) : 0.0;
+  for (std::size_t p = 0; p < out.size(); ++p)
+    out.data()[p] = static_cast<std::uint16_t>(std::lround((intensity.data()[p] - lo) * scale));
+  return out;
+}
+
+inline std::string two_digits(std::size_t n) {
+  return (n < 10 ? "0" : "") + std::to_string(n);
+}
+
+inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
+                                const SampledView& b, const std::string& name_a,
+                                const std::string& name_b) {
+  nlohmann::json dense = nlohmann::json::array();
+  for (const auto& c : labels.dense)
+    dense.push_back({c.a.x(), c.a.y(), c.b.x(), c.b.y(), c.world.x(), c.world.y(), c.world.z(),
+                     c.branch, c.index, c.radius});
+  return {{"view_a", name_a},
+          {"view_b", name_b},
+          {"view_class_a", a.view_class},
+          {"view_class_b", b.view_class},
+          {"F", gimm::detail::matrix_to_json(labels.F)},
+          {"F_convention", "x_b^T F x_a = 0, pixels"},
+          {"dense_fields",
+           {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm", "branch", "point", "radius_mm"}},
+          {"dense", dense},
+          {"sparse", labels.sparse}};
+}
+
+}  // namespace detail
+
+/// Generates one patient into out/patients/<id>/ and returns its record (also written as
+/// done.json, last). Throws on bad input; the caller records the error.
+inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
+                                       const std::filesystem::path& out) {
+  namespace fs = std::filesystem;
+  const auto t0 = std::chrono::steady_clock::now();
+  Volume<float> hu;
+  Volume<std::uint8_t> label;
+  if (src.phantom_seed) {
+    PhantomOptions po;
+    po.seed = *src.phantom_seed;
+    po.size = src.phantom_size;
+    Phantom p = make_phantom(po);
+    hu = volume_cast<float>(p.hu);
+    label = std::move(p.label);
+  } else {
+    GIMM_CHECK_AS(IoError, fs::exists(src.label),
+                  "patient " << src.id << ": label '" << src.label.string() << "' is missing");
+    hu = read_nifti<float>(src.image);
+    label = read_nifti<std::uint8_t>(src.label);
+    GIMM_CHECK(hu.dims() == label.dims() && (hu.spacing() - label.spacing()).norm() < 1e-4 &&
+                   (hu.origin() - label.origin()).norm() < 1e-3,
+               "patient " << src.id << ": image and label grids disagree (" << hu.nx() << "x"
+                          << hu.ny() << "x" << hu.nz() << " vs " << label.nx() << "x" << label.ny()
+                          << "x" << label.nz() << ")");
+  }
+  const auto split = split_coronary_systems(label, {}, "patient " + src.id + " label");
+  const fs::path dir = out / "patients" / src.id;
+  fs::create_directories(dir / "views");
+  fs::create_directories(dir / "pairs");
+
+  Rng rng = Rng(o.seed).fork(stable_hash(src.id));
+  nlohmann::json record = {
+      {"id", src.id}, {"split", split_of(src.id, o)}, {"systems", nlohmann::json::object()}};
+  CenterlineTree all;
+  for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
+    const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
+    SkeletonOptions so;
+    so.system = system;
+    so.min_spur_mm = o.min_spur_mm;
+    const CenterlineTree tree = extract_centerlines(mask, so, "patient " + src.id);
+    const auto points = flatten_centerlines(tree);
+    const int shift = static_cast<int>(all.branches.size());
+    for (auto b : tree.branches) {
+      if (b.parent >= 0) b.parent += shift;
+      all.branches.push_back(std::move(b));
+    }
+    ContrastRecipe recipe;
+    recipe.preset = o.recipe;
+    const Volume<float> mu = make_attenuation(hu, &mask, recipe, "patient " + src.id);
+    const ViewPlan plan = plan_views(system, o.view_mode, rng);
+    const Eigen::Vector3d centre = [&] {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const auto& p : points) sum += p.world;
+      return Eigen::Vector3d(sum / std::max<std::size_t>(1, points.size()));
+    }();
+    std::vector<Camerad> cameras;
+    std::vector<std::vector<ProjectedPoint>> projected;
+    std::vector<std::string> names;
+    for (std::size_t v = 0; v < plan.views.size(); ++v) {
+      CArm carm = o.carm;
+      carm.primary_deg = plan.views[v].primary_deg;
+      carm.secondary_deg = plan.views[v].secondary_deg;
+      carm.isocenter = centre;
+      const Camerad camera = carm.camera();
+      const std::string name = std::string(to_string(system)) + "_" + detail::two_digits(v);
+      DrrOptions drr;
+      drr.projector = o.projector;
+      write_png(dir / "views" / (name + ".png"),
+                detail::to_png16(beer_lambert(render_line_integrals(mu, camera, drr))));
+      Image<std::uint8_t> vessel = project_mask(mask, camera);
+      projected.push_back(label_view(points, camera, &vessel));
+      for (auto& px : vessel.storage()) px = px ? 255 : 0;
+      write_png(dir / "views" / (name + ".mask.png"), vessel);
+      nlohmann::json cj = to_json(carm);
+      cj["view_class"] = plan.views[v].view_class;
+      cj["view_name"] = view_class(plan.views[v].view_class).name;
+      cj["system"] = to_string(system);
+      write_json_file(dir / "views" / (name + ".camera.json"), cj);
+      cameras.push_back(camera);
+      names.push_back(name);
+    }
+    std::size_t dense_total = 0;
+    for (const auto& pr : plan.pairs) {
+      const PairLabels labels = label_pair(points, projected[pr.a], projected[pr.b], cameras[pr.a],
+                                           cameras[pr.b], o.sparse_count, rng);
+      dense_total += labels.dense.size();
+      const std::string name = names[pr.a] + "-" + names[pr.b].substr(4);
+      write_json_file(
+          dir / "pairs" / (name + ".json"),
+          detail::pair_json(labels, plan.views[pr.a], plan.views[pr.b], names[pr.a], names[pr.b]),
+          -1);
+    }
+    record["systems"][to_string(system)] = {{"views", plan.views.size()},
+                                            {"pairs", plan.pairs.size()},
+                                            {"centerline_mm", tree.length()},
+                                            {"dense_labels", dense_total}};
+  }
+  write_json_file(dir / "centerlines.json", to_json(all), -1);
+  record["status"] = "ok";
+  record["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  nlohmann::json stored = record;
+  stored.erase("seconds");  // timing varies run to run; done.json must not
+  write_json_file(dir / "done.json", stored);
+  return record;
+}
+
+}  // namespace gimm

@@ -1,0 +1,157 @@
+#!/usr/bin/env python3
+"""gimm-dataset end to end: labels reproject, split by patient, a run killed at any moment
+and restarted equals an uninterrupted run byte for byte, N shards merged equal one run, and
+bad patients are recorded while the rest goes on.
+
+Usage: dataset_test.py BIN_DIR TMP_DIR
+"""
+import filecmp
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+BIN, TMP = sys.argv[1], sys.argv[2]
+DATASET = os.path.join(BIN, "gimm-dataset")
+COMMON = ["--phantom", "4", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
+          "--quiet"]
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+
+
+def run(args, env=None, ok=True):
+    proc = subprocess.run([DATASET, *args], capture_output=True, text=True,
+                          env={**os.environ, **(env or {})})
+    if ok and proc.returncode != 0:
+        failures.append(f"{args}: exit {proc.returncode}: {proc.stderr[-800:]}")
+    return proc
+
+
+def tree_files(root):
+    out = []
+    for d, _, files in os.walk(root):
+        out += [os.path.relpath(os.path.join(d, f), root) for f in files]
+    return sorted(out)
+
+
+def same_tree(a, b, what):
+    fa, fb = tree_files(a), tree_files(b)
+    if fa != fb:
+        failures.append(f"{what}: file lists differ: {sorted(set(fa) ^ set(fb))[:10]}")
+        return
+    diff = [f for f in fa if not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
+    check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
+
+
+shutil.rmtree(TMP, ignore_errors=True)
+os.makedirs(TMP)
+full = os.path.join(TMP, "full")
+run(COMMON + ["--out", full])
+
+# Labels: every dense label reprojects with its cameras and satisfies the exact F.
+manifest = json.load(open(os.path.join(full, "manifest.json")))
+check(len(manifest["patients"]) == 4 and all(p["status"] == "ok" for p in manifest["patients"]),
+      "four ok patients")
+pdir = os.path.join(full, "patients", "phantom-0001")
+pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
+check(len(pairs) == 27, f"27 pairs per patient in shared mode, got {len(pairs)}")
+check(len(os.listdir(os.path.join(pdir, "views"))) == 33, "11 views x (png, mask, camera)")
+worst_px = worst_epi = 0.0
+for name in pairs:
+    lab = json.load(open(os.path.join(pdir, "pairs", name)))
+    Pa = np.array(json.load(open(os.path.join(pdir, "views", lab["view_a"] + ".camera.json")))["P"])
+    Pb = np.array(json.load(open(os.path.join(pdir, "views", lab["view_b"] + ".camera.json")))["P"])
+    F = np.array(lab["F"])
+    d = np.array(lab["dense"])
+    check(len(d) > 50, f"{name}: only {len(d)} dense labels")
+    check(len(lab["sparse"]) == 20, f"{name}: {len(lab['sparse'])} sparse labels")
+    X = np.c_[d[:, 4:7], np.ones(len(d))]
+    for P, uv in [(Pa, d[:, 0:2]), (Pb, d[:, 2:4])]:
+        x = X @ P.T
+        worst_px = max(worst_px, np.abs(x[:, :2] / x[:, 2:] - uv).max())
+    xa, xb = np.c_[d[:, 0:2], np.ones(len(d))], np.c_[d[:, 2:4], np.ones(len(d))]
+    lines = xa @ F.T
+    dist = np.abs((xb * lines).sum(1)) / np.hypot(lines[:, 0], lines[:, 1])
+    worst_epi = max(worst_epi, dist.max())
+check(worst_px < 1e-3, f"labels reproject to {worst_px} px")
+check(worst_epi < 1e-6, f"labels lie {worst_epi} px off their epipolar lines")
+
+# Split by patient: each patient in exactly one split file.
+seen = []
+for s in ["train", "val", "test"]:
+    seen += open(os.path.join(full, "splits", s + ".txt")).read().split()
+check(sorted(seen) == [f"phantom-{n:04d}" for n in range(4)], f"splits {seen}")
+
+# Killed and resumed (SIGKILL at several moments) equals uninterrupted.
+for delay in [0.25, 0.6, 1.0]:
+    out = os.path.join(TMP, f"killed_{delay}")
+    proc = subprocess.Popen([DATASET, *COMMON, "--out", out])
+    time.sleep(delay)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    run(COMMON + ["--out", out])
+    same_tree(full, out, f"resume after kill at {delay} s")
+
+# Shards (flag, Slurm and Kubernetes variables) merged equal one run.
+for how in ["flag", "slurm", "k8s"]:
+    out = os.path.join(TMP, f"shards_{how}")
+    for i in range(3):
+        if how == "flag":
+            run(COMMON + ["--out", out, "--shard", f"{i}/3"])
+        elif how == "slurm":
+            run(COMMON + ["--out", out], env={"SLURM_ARRAY_TASK_ID": str(i + 1),
+                                              "SLURM_ARRAY_TASK_COUNT": "3",
+                                              "SLURM_ARRAY_TASK_MIN": "1"})
+        else:
+            run(COMMON + ["--out", out], env={"JOB_COMPLETION_INDEX": str(i),
+                                              "GIMM_SHARD_COUNT": "3"})
+    run(["merge", "--out", out])
+    same_tree(full, out, f"3 shards ({how}) merged")
+out = os.path.join(TMP, "shards_missing")
+run(COMMON + ["--out", out, "--shard", "0/2"])
+proc = run(["merge", "--out", out], ok=False)
+check(proc.returncode != 0 and "shard 1 of 2 is missing" in proc.stderr, "merge with a missing shard")
+proc = run(COMMON + ["--out", out, "--shard", "2/2"], ok=False)
+check(proc.returncode != 0 and "out of range" in proc.stderr, "bad --shard")
+
+# A folder with bad patients: the good one is made, the bad ones are recorded.
+folder = os.path.join(TMP, "imagecas")
+os.makedirs(folder)
+subprocess.run([os.path.join(BIN, "gimm-phantom"), "--seed", "1", "--out", folder], check=True,
+               capture_output=True)
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "2.img.nii.gz"))  # no label
+subprocess.run([os.path.join(BIN, "gimm-phantom"), "--seed", "3", "--out", os.path.join(TMP, "x")],
+               check=True, capture_output=True)
+import nibabel as nib  # noqa: E402
+small = nib.load(os.path.join(TMP, "x", "3.label.nii.gz"))
+nib.save(nib.Nifti1Image(np.asarray(small.dataobj)[:64], small.affine),
+         os.path.join(folder, "3.label.nii.gz"))
+shutil.copy(os.path.join(TMP, "x", "3.img.nii.gz"), os.path.join(folder, "3.img.nii.gz"))
+out = os.path.join(TMP, "folder_out")
+run(["--input", folder, "--out", out, "--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet"])
+m = json.load(open(os.path.join(out, "manifest.json")))
+status = {p["id"]: p for p in m["patients"]}
+check(status.get("1", {}).get("status") == "ok", f"patient 1: {status.get('1')}")
+check("missing" in status.get("2", {}).get("error", ""), f"patient 2: {status.get('2')}")
+check("disagree" in status.get("3", {}).get("error", ""), f"patient 3: {status.get('3')}")
+ro = os.path.join(TMP, "read_only")
+os.makedirs(ro)
+os.chmod(ro, 0o500)
+if os.access(ro, os.W_OK):  # running as root: permissions are not enforced
+    ro = "/proc/gimm-cannot-write-here"
+proc = run(COMMON + ["--out", ro], ok=False)
+check(proc.returncode != 0 and "error" in proc.stderr, "unwritable output must fail up front")
+
+if failures:
+    print("\n".join("FAIL: " + f for f in failures))
+    sys.exit(1)
+print("dataset_test: all checks passed")
