@@ -140,8 +140,9 @@ int main(int argc, char** argv) {
   app.failure_message(CLI::FailureMessage::help);
   gimm::DatasetOptions options;
   gimm::cli::CArmFlags flags;
-  std::string input, out, shard_flag, view_mode = "shared", recipe = "angiography",
-                                      projector = "siddon", phantom_size = "small";
+  std::string input, out, shard_flag, view_mode = "shared", vessel_mode = "voxel",
+                                      recipe = "angiography", projector = "siddon",
+                                      phantom_size = "small";
   int phantom_count = 0;
   bool quiet = false;
   app.add_option("--input", input, "folder of ImageCAS-style N.img.nii.gz + N.label.nii.gz");
@@ -162,6 +163,10 @@ int main(int argc, char** argv) {
   app.add_option("--projector", projector, "siddon|trilinear")
       ->check(CLI::IsMember({"siddon", "trilinear"}))
       ->capture_default_str();
+  app.add_option("--vessels", vessel_mode,
+                 "voxel (label voxels) | mesh (Embree chords, anti-aliased)")
+      ->check(CLI::IsMember({"voxel", "mesh"}))
+      ->capture_default_str();
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
   app.add_flag("--quiet", quiet, "no progress line");
   flags.add(app, options.carm, false);
@@ -176,6 +181,7 @@ int main(int argc, char** argv) {
     options.view_mode = gimm::parse_view_mode(view_mode);
     options.recipe = gimm::parse_contrast_preset(recipe);
     options.projector = gimm::parse_projector(projector);
+    options.vessel_mode = gimm::parse_vessel_mode(vessel_mode);
     const Shard shard = resolve_shard(shard_flag);
     std::vector<gimm::PatientSource> sources;
     if (!input.empty()) {
