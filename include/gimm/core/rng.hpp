@@ -78,9 +78,11 @@ class Rng {
   /// Uniform integer in [lo, hi] (inclusive).
   std::int64_t uniform_int(std::int64_t lo, std::int64_t hi) {
     GIMM_CHECK(lo <= hi, "Rng::uniform_int: need lo <= hi, got [" << lo << ", " << hi << "]");
-    const auto span = static_cast<std::uint64_t>(hi - lo) + 1;
+    // Unsigned (modular) arithmetic: hi - lo overflows std::int64_t for wide ranges.
+    const auto ulo = static_cast<std::uint64_t>(lo);
+    const std::uint64_t span = static_cast<std::uint64_t>(hi) - ulo + 1;
     if (span == 0) return static_cast<std::int64_t>(next_u64());  // full 64-bit range
-    return lo + static_cast<std::int64_t>(below(span));
+    return static_cast<std::int64_t>(ulo + below(span));
   }
 
   /// Standard normal N(0, 1) by the Box-Muller transform (pairs cached).

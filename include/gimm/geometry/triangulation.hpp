@@ -71,7 +71,9 @@ std::optional<Eigen::Matrix<Scalar, 3, 1>> triangulate_midpoint(
     b += M * r.origin;
   }
   Eigen::JacobiSVD<Mat3> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const auto& sigma = svd.singularValues();
+  // A copy, not a reference: GCC 12 at -O3 otherwise warns (-Wmaybe-uninitialized, a false
+  // positive) in every translation unit that calls this with -Wall.
+  const Vec3 sigma = svd.singularValues();
   if (!(sigma(2) > Scalar(1e3) * std::numeric_limits<Scalar>::epsilon() * sigma(0)))
     return std::nullopt;
   return svd.solve(b);
