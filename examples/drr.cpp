@@ -39,19 +39,6 @@ Eigen::Vector3d mask_centroid(const gimm::Volume<std::uint8_t>& mask) {
   return mask.index_to_world(sum / count);
 }
 
-gimm::Image<std::uint16_t> to_png16(const gimm::Image<float>& intensity) {
-  float lo = intensity.data()[0], hi = lo;
-  for (const float v : intensity.storage()) {
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-  }
-  gimm::Image<std::uint16_t> out(intensity.rows(), intensity.cols(), 0);
-  const double scale = hi > lo ? 65535.0 / (hi - lo) : 0.0;
-  for (std::size_t p = 0; p < out.size(); ++p)
-    out.data()[p] = static_cast<std::uint16_t>(std::lround((intensity.data()[p] - lo) * scale));
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -138,7 +125,8 @@ int main(int argc, char** argv) {
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
     gimm::write_npy(out_prefix + ".npy", line_integrals);
-    gimm::write_png(out_prefix + ".png", to_png16(gimm::beer_lambert(line_integrals)));
+    gimm::write_png(out_prefix + ".png",
+                    gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals)));
     gimm::write_json_file(out_prefix + ".camera.json", camera_json);
     const auto t_done = std::chrono::steady_clock::now();
     auto ms = [](auto a, auto b) {

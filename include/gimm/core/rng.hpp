@@ -30,7 +30,8 @@ class Rng {
   }
 
   /// An independent generator for sub-stream `index` (a patient, a pixel row, a view): its
-  /// stream depends only on this generator's seed state and `index`, never on call order.
+  /// stream depends on this generator's current state and `index` (fork before drawing, as the
+  /// pipeline does, and it depends only on the seed). Forking does not advance this generator.
   Rng fork(std::uint64_t index) const {
     std::uint64_t x = state_[0] ^ (state_[3] * 0x9E3779B97F4A7C15ull) ^
                       (index + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull;

@@ -333,7 +333,8 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
               std::ceil(std::log(1 - options.confidence) / std::log1p(-p_good_sample))));
     }
   }
-  if (result.F) {  // final least-squares refit on all inliers, kept only if it scores no worse
+  if (result
+          .F) {  // final least-squares refit on all inliers, kept only if it scores strictly better
     if (const auto refined = refit(result.inliers)) consider(*refined);
   }
   result.stats.inlier_ratio =

@@ -140,19 +140,6 @@ inline std::string split_of(const std::string& id, const DatasetOptions& o) {
 
 namespace detail {
 
-inline Image<std::uint16_t> to_png16(const Image<float>& intensity) {
-  float lo = intensity.data()[0], hi = lo;
-  for (const float v : intensity.storage()) {
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-  }
-  Image<std::uint16_t> out(intensity.rows(), intensity.cols(), 0);
-  const double scale = hi > lo ? 65535.0 / (hi - lo) : 0.0;
-  for (std::size_t p = 0; p < out.size(); ++p)
-    out.data()[p] = static_cast<std::uint16_t>(std::lround((intensity.data()[p] - lo) * scale));
-  return out;
-}
-
 inline std::string two_digits(std::size_t n) {
   return (n < 10 ? "0" : "") + std::to_string(n);
 }
@@ -278,7 +265,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       } else {
         vessel = project_mask(mask_box, camera);
       }
-      write_png(dir / "views" / (name + ".png"), detail::to_png16(beer_lambert(integrals)));
+      write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
       projected.push_back(label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr));
       for (auto& px : vessel.storage()) px = px ? 255 : 0;
       write_png(dir / "views" / (name + ".mask.png"), vessel);

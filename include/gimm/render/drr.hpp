@@ -4,6 +4,7 @@
 ///
 /// Multithreaded over detector rows (OpenMP, dynamic schedule); every pixel is computed on its
 /// own from the camera and the volume, so the image is bit-identical on any thread count.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -78,6 +79,18 @@ Image<std::uint8_t> project_mask(const Volume<T>& mask, const Camerad& camera,
   const Image<float> chord = render_line_integrals(unit, camera);
   Image<std::uint8_t> out(camera.rows(), camera.cols(), 0);
   for (std::size_t p = 0; p < out.size(); ++p) out.data()[p] = chord.data()[p] >= min_chord_mm;
+  return out;
+}
+
+/// Min-max normalisation to the full 16-bit range (a constant image becomes 0), for PNG output.
+inline Image<std::uint16_t> to_uint16_min_max(const Image<float>& image) {
+  Image<std::uint16_t> out(image.rows(), image.cols(), 0);
+  if (image.empty()) return out;
+  const auto [lo_it, hi_it] = std::minmax_element(image.storage().begin(), image.storage().end());
+  const double lo = *lo_it, hi = *hi_it;
+  const double scale = hi > lo ? 65535.0 / (hi - lo) : 0.0;
+  for (std::size_t p = 0; p < out.size(); ++p)
+    out.data()[p] = static_cast<std::uint16_t>(std::lround((image.data()[p] - lo) * scale));
   return out;
 }
 
