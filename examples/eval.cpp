@@ -1,0 +1,210 @@
+// gimm-eval: scores predicted matches against a gimm-dataset with the reference protocol
+// (docs/evaluation.md, include/gimm/metrics/).
+//   gimm-eval --dataset DIR --predictions PRED_DIR [--top-k 20] [--out DIR] [--name NAME]
+//             [--split all|train|val|test] [--worst 10]
+//   gimm-eval --compare RUN1 RUN2 ... [--out DIR]      RUNs: --out directories of earlier runs
+// Prints a Markdown table (Prec@1/3/5 px, 2D and 3D errors, coverage, exact-geometry check);
+// with --out writes summary.json, table.md, worst_pairs.md and topk.tsv (compare: compare.md).
+// A pair without a predictions file counts as a pair with no matches (coverage 0).
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "cli_common.hpp"
+#include "gimm/metrics/summary.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string k_label(long k) {
+  return k > 0 ? std::to_string(k) : "all";
+}
+
+struct PairRow {
+  std::string id;
+  gimm::Summary s;
+};
+
+std::vector<PairRow> worst_pairs(const std::vector<gimm::PairScore>& pairs, long k,
+                                 std::size_t count) {
+  std::vector<PairRow> rows;
+  for (const auto& p : pairs) {
+    gimm::SummaryBuilder b(k);
+    b.add(p);
+    rows.push_back({p.id, b.summary()});
+  }
+  // Worst first: nothing scored, then by descending mean 2D error; ties by id.
+  std::stable_sort(rows.begin(), rows.end(), [](const PairRow& a, const PairRow& b) {
+    const bool na = std::isnan(a.s.mean_px), nb = std::isnan(b.s.mean_px);
+    if (na != nb) return na;
+    return !na && a.s.mean_px > b.s.mean_px;
+  });
+  if (rows.size() > count) rows.resize(count);
+  return rows;
+}
+
+std::string breakdown_table(const std::string& title, const std::string& column,
+                            const std::map<std::string, gimm::Summary>& groups) {
+  std::string md = "\n### " + title + "\n\n" + gimm::markdown_header(column);
+  for (const auto& [key, s] : groups) md += gimm::markdown_row(key, s);
+  return md;
+}
+
+int evaluate(const std::string& dataset, const std::string& predictions, long top_k,
+             const std::string& out, std::string name, const std::string& split,
+             std::size_t worst_count) {
+  GIMM_CHECK(fs::is_directory(predictions),
+             "predictions directory '" << predictions << "' does not exist");
+  if (name.empty()) name = fs::path(predictions).lexically_normal().filename().string();
+  if (name.empty()) name = fs::path(predictions).lexically_normal().parent_path().filename();
+  gimm::DatasetReader reader(dataset);
+  const auto ids = reader.pair_ids(split);
+  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
+  std::vector<gimm::PairScore> pairs;
+  std::size_t missing = 0;
+  for (const auto& id : ids) {
+    const gimm::PairTruth truth = reader.pair(id);
+    const fs::path file = gimm::matches_path(predictions, id);
+    if (!fs::exists(file)) {
+      ++missing;
+      pairs.push_back(gimm::missing_pair(truth));
+      continue;
+    }
+    pairs.push_back(gimm::score_pair(truth, gimm::read_matches(file)));
+  }
+  if (missing > 0)
+    std::fprintf(stderr, "gimm-eval: warning: %zu of %zu pairs have no predictions file in %s\n",
+                 missing, ids.size(), predictions.c_str());
+
+  const gimm::Summary pooled = gimm::summarize(pairs, top_k);
+  const auto by_system =
+      gimm::summarize_by(pairs, top_k, [](const gimm::PairScore& p) { return p.system; });
+  const auto by_class =
+      gimm::summarize_by(pairs, top_k, [](const gimm::PairScore& p) { return p.class_pair; });
+  const auto worst = worst_pairs(pairs, top_k, worst_count);
+  const auto ks = gimm::curve_ks(pairs, top_k);
+
+  std::string md = "## " + name + " (top-K = " + k_label(top_k) + ", " +
+                   std::to_string(pairs.size()) + " pairs)\n\n" + gimm::markdown_header() +
+                   gimm::markdown_row(name, pooled);
+  std::string extra = breakdown_table("By system", "system", by_system) +
+                      breakdown_table("By view-class pair", "view classes", by_class);
+  std::string curve_md = "\n### Top-K curve\n\n" + gimm::markdown_header("K");
+  nlohmann::json curve = nlohmann::json::array();
+  std::string tsv = "# k\tprec_1px\tprec_3px\tprec_5px\tmean_px\tmean_mm\tcoverage\n";
+  for (long k : ks) {
+    const gimm::Summary s = gimm::summarize(pairs, k);
+    curve_md += gimm::markdown_row(k_label(k), s);
+    nlohmann::json j = gimm::to_json(s);
+    j["k"] = k > 0 ? nlohmann::json(k) : nlohmann::json("all");
+    curve.push_back(j);
+    if (k > 0)
+      tsv += std::to_string(k) + "\t" + gimm::fmt(s.prec[0], 6) + "\t" + gimm::fmt(s.prec[1], 6) +
+             "\t" + gimm::fmt(s.prec[2], 6) + "\t" + gimm::fmt(s.mean_px, 6) + "\t" +
+             gimm::fmt(s.mean_mm, 6) + "\t" + gimm::fmt(s.coverage, 6) + "\n";
+  }
+  std::string worst_md = "\n### Worst pairs (by mean 2D error; nothing scored first)\n\n" +
+                         gimm::markdown_header("pair");
+  nlohmann::json worst_json = nlohmann::json::array();
+  for (const auto& row : worst) {
+    worst_md += gimm::markdown_row(row.id, row.s);
+    nlohmann::json j = gimm::to_json(row.s);
+    j["pair"] = row.id;
+    worst_json.push_back(j);
+  }
+  std::cout << md << extra;
+  if (!out.empty()) {
+    fs::create_directories(out);
+    nlohmann::json systems = nlohmann::json::object(), classes = nlohmann::json::object();
+    for (const auto& [k, s] : by_system) systems[k] = gimm::to_json(s);
+    for (const auto& [k, s] : by_class) classes[k] = gimm::to_json(s);
+    nlohmann::json per_pair = nlohmann::json::array();
+    for (const auto& p : pairs) {
+      gimm::SummaryBuilder b(top_k);
+      b.add(p);
+      nlohmann::json j = gimm::to_json(b.summary());
+      j["pair"] = p.id;
+      per_pair.push_back(j);
+    }
+    const nlohmann::json summary = {{"format", "gimm-eval/1"},
+                                    {"method", name},
+                                    {"dataset", dataset},
+                                    {"predictions", predictions},
+                                    {"split", split},
+                                    {"top_k", top_k},
+                                    {"pooled", gimm::to_json(pooled)},
+                                    {"by_system", systems},
+                                    {"by_class_pair", classes},
+                                    {"topk_curve", curve},
+                                    {"worst_pairs", worst_json},
+                                    {"pairs", per_pair}};
+    gimm::write_json_file(fs::path(out) / "summary.json", summary);
+    gimm::write_file_atomic(fs::path(out) / "table.md", md + extra + curve_md + worst_md);
+    gimm::write_file_atomic(fs::path(out) / "worst_pairs.md", worst_md.substr(1));
+    gimm::write_file_atomic(fs::path(out) / "topk.tsv", tsv);
+    std::fprintf(stderr, "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv}\n",
+                 out.c_str());
+  }
+  return 0;
+}
+
+int compare(const std::vector<std::string>& runs, const std::string& out) {
+  std::string md;
+  long top_k = -1;
+  std::string rows;
+  for (const auto& run : runs) {
+    const fs::path file = fs::path(run) / "summary.json";
+    GIMM_CHECK_AS(gimm::IoError, fs::exists(file),
+                  "'" << run << "' is not a gimm-eval output directory (no summary.json)");
+    const auto j = gimm::read_json_file(file);
+    GIMM_CHECK_AS(gimm::FormatError, j.value("format", "") == "gimm-eval/1",
+                  file.string() << ": not a gimm-eval/1 summary");
+    const long k = j.at("top_k").get<long>();
+    if (top_k >= 0 && k != top_k)
+      std::fprintf(stderr, "gimm-eval: warning: %s was scored with top-K %ld, the first with %ld\n",
+                   run.c_str(), k, top_k);
+    if (top_k < 0) top_k = k;
+    rows += gimm::markdown_row(j.value("method", run), gimm::summary_from_json(j.at("pooled")));
+  }
+  md = "## Comparison (top-K = " + k_label(top_k) + ")\n\n" + gimm::markdown_header() + rows;
+  std::cout << md;
+  if (!out.empty()) {
+    fs::create_directories(out);
+    gimm::write_file_atomic(fs::path(out) / "compare.md", md);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"gimm-eval: score predicted matches with the reference protocol"};
+  app.failure_message(CLI::FailureMessage::help);
+  std::string dataset, predictions, out, name, split = "all";
+  std::vector<std::string> runs;
+  long top_k = 20;
+  std::size_t worst = 10;
+  app.add_option("--dataset", dataset, "gimm-dataset directory");
+  app.add_option("--predictions", predictions, "predictions directory (<patient>/<pair>.json)");
+  app.add_option("--top-k", top_k, "most confident matches kept per pair (0 = all)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--out", out, "output directory");
+  app.add_option("--name", name, "method name in the tables (default: predictions folder)");
+  app.add_option("--split", split, "all|train|val|test")
+      ->check(CLI::IsMember({"all", "train", "val", "test"}))
+      ->capture_default_str();
+  app.add_option("--worst", worst, "worst pairs listed")->capture_default_str();
+  app.add_option("--compare", runs, "compare earlier runs (their --out directories)");
+  return gimm::cli::run(app, argc, argv, [&] {
+    if (!runs.empty()) {
+      GIMM_CHECK(dataset.empty() && predictions.empty(),
+                 "--compare takes run directories only, not --dataset/--predictions");
+      return compare(runs, out);
+    }
+    GIMM_CHECK(!dataset.empty() && !predictions.empty(),
+               "give --dataset and --predictions (or --compare RUN...)");
+    return evaluate(dataset, predictions, top_k, out, name, split, worst);
+  });
+}

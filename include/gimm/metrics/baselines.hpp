@@ -1,0 +1,114 @@
+#pragma once
+/// Reference matchers that need no training, to calibrate the evaluation (docs/evaluation.md).
+///
+/// oracle:   every dense GT label a <-> b + n, n ~ N(0, sigma^2 I) in pixels (gimm::Rng), with a
+///           uniform random confidence (so the top K is a random sample of the labels). With
+///           sigma = 0 it is the labels themselves.
+/// epipolar: for up to `max_points` vessel pixels of A (a seeded random sample of view A's mask,
+///           in random order), the vessel pixels of B within `band_px` of the exact epipolar
+///           line F a are grouped into crossings (runs along the line with gaps <= gap_px); each
+///           crossing's point is the foot on the line of the middle of its run; the match is the
+///           crossing nearest to a in pixels (the views share the isocentre, so the nearest is a
+///           weak prior), with confidence 1 / (number of crossings). A pixels whose line meets
+///           no vessel in B give no match.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+#include "gimm/core/rng.hpp"
+#include "gimm/metrics/matches.hpp"
+#include "gimm/metrics/truth.hpp"
+
+namespace gimm {
+
+/// FNV-1a of a string: a platform-independent seed for per-pair random streams.
+inline std::uint64_t fnv1a(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+inline PairMatches oracle_matches(const PairTruth& truth, double sigma_px, Rng& rng) {
+  GIMM_CHECK(std::isfinite(sigma_px) && sigma_px >= 0,
+             "oracle: sigma must be finite and >= 0, got " << sigma_px);
+  PairMatches m;
+  m.pair = truth.id;
+  for (const auto& c : truth.dense) {
+    const double du = rng.normal(0, sigma_px), dv = rng.normal(0, sigma_px);
+    m.add(c.a, c.b + Eigen::Vector2d(du, dv), rng.uniform());
+  }
+  return m;
+}
+
+struct EpipolarBaselineOptions {
+  std::size_t max_points = 300;  ///< A pixels sampled
+  double band_px = 1.0;          ///< B pixels within this distance of the line are candidates
+  double gap_px = 2.0;           ///< a larger gap along the line starts a new crossing
+};
+
+/// The vessel pixels of a mask as (u, v) = (column, row), row-major.
+inline std::vector<Eigen::Vector2d> mask_pixels(const Image<std::uint8_t>& mask) {
+  std::vector<Eigen::Vector2d> out;
+  for (int r = 0; r < mask.rows(); ++r)
+    for (int c = 0; c < mask.cols(); ++c)
+      if (mask(r, c) != 0) out.emplace_back(c, r);
+  return out;
+}
+
+/// The crossings of the line l = (a, b, c) with a set of pixels: the foot points on the line of
+/// the middles of the runs of pixels within band_px of it, in order along the line.
+inline std::vector<Eigen::Vector2d> line_crossings(const Eigen::Vector3d& l,
+                                                   const std::vector<Eigen::Vector2d>& pixels,
+                                                   double band_px, double gap_px) {
+  std::vector<Eigen::Vector2d> out;
+  const double n = std::hypot(l.x(), l.y());
+  if (!(n > 0) || !l.allFinite()) return out;
+  const Eigen::Vector2d normal = l.head<2>() / n;
+  const Eigen::Vector2d dir(-normal.y(), normal.x());
+  const Eigen::Vector2d foot0 = -l.z() / n * normal;  // the line's point nearest the origin
+  std::vector<double> ts;
+  for (const auto& q : pixels)
+    if (std::abs(normal.dot(q) + l.z() / n) <= band_px) ts.push_back(dir.dot(q));
+  std::sort(ts.begin(), ts.end());
+  for (std::size_t s = 0; s < ts.size();) {
+    std::size_t e = s;
+    while (e + 1 < ts.size() && ts[e + 1] - ts[e] <= gap_px) ++e;
+    out.push_back(foot0 + 0.5 * (ts[s] + ts[e]) * dir);
+    s = e + 1;
+  }
+  return out;
+}
+
+inline PairMatches epipolar_matches(const PairTruth& truth, const EpipolarBaselineOptions& o,
+                                    Rng& rng) {
+  GIMM_CHECK(truth.mask_a && truth.mask_b,
+             "epipolar baseline: pair " << truth.id << " has no masks");
+  GIMM_CHECK(o.band_px >= 0 && o.gap_px >= 0, "epipolar baseline: band and gap must be >= 0");
+  PairMatches m;
+  m.pair = truth.id;
+  std::vector<Eigen::Vector2d> a_pixels = mask_pixels(*truth.mask_a);
+  const std::vector<Eigen::Vector2d> b_pixels = mask_pixels(*truth.mask_b);
+  // Partial Fisher-Yates: a seeded sample of max_points A pixels, in random order.
+  const std::size_t count = std::min(o.max_points, a_pixels.size());
+  for (std::size_t i = 0; i < count; ++i)
+    std::swap(a_pixels[i], a_pixels[i + rng.below(a_pixels.size() - i)]);
+  a_pixels.resize(count);
+  for (const auto& a : a_pixels) {
+    const auto crossings = line_crossings(truth.F * a.homogeneous(), b_pixels, o.band_px, o.gap_px);
+    if (crossings.empty()) continue;
+    std::size_t best = 0;
+    for (std::size_t c = 1; c < crossings.size(); ++c)
+      if ((crossings[c] - a).squaredNorm() < (crossings[best] - a).squaredNorm()) best = c;
+    m.add(a, crossings[best], 1.0 / static_cast<double>(crossings.size()));
+  }
+  return m;
+}
+
+}  // namespace gimm
