@@ -64,7 +64,7 @@ check(len(manifest["patients"]) == 4 and all(p["status"] == "ok" for p in manife
 pdir = os.path.join(full, "patients", "phantom-0001")
 pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
 check(len(pairs) == 27, f"27 pairs per patient in shared mode, got {len(pairs)}")
-check(len(os.listdir(os.path.join(pdir, "views"))) == 33, "11 views x (png, mask, camera)")
+check(len(os.listdir(os.path.join(pdir, "views"))) == 44, "11 views x (png, mask, camera, points)")
 worst_px = worst_epi = 0.0
 for name in pairs:
     lab = json.load(open(os.path.join(pdir, "pairs", name)))
@@ -83,6 +83,19 @@ for name in pairs:
     dist = np.abs((xb * lines).sum(1)) / np.hypot(lines[:, 0], lines[:, 1])
     worst_epi = max(worst_epi, dist.max())
 check(worst_px < 1e-3, f"labels reproject to {worst_px} px")
+# Per-view points: the branch/point indices address centerlines.json, and the pair labels are
+# exactly the points valid (in image, on mask) in both views.
+tree = json.load(open(os.path.join(pdir, "centerlines.json")))
+lab = json.load(open(os.path.join(pdir, "pairs", pairs[0])))
+va = json.load(open(os.path.join(pdir, "views", lab["view_a"] + ".points.json")))
+vb = json.load(open(os.path.join(pdir, "views", lab["view_b"] + ".points.json")))
+valid = [n for n in range(len(va["u"])) if va["in_image"][n] and va["on_mask"][n]
+         and vb["in_image"][n] and vb["on_mask"][n]]
+check(len(valid) == len(lab["dense"]), f"{len(valid)} valid points vs {len(lab['dense'])} labels")
+for row, n in zip(lab["dense"][:50], valid[:50]):
+    xyz = tree["branches"][va["branch"][n]]["points"][va["point"][n]]
+    check(np.allclose(row[4:7], xyz) and row[7] == va["branch"][n] and
+          abs(row[0] - va["u"][n]) < 1e-9, f"label {row[:9]} vs centerline point {xyz}")
 check(worst_epi < 1e-6, f"labels lie {worst_epi} px off their epipolar lines")
 
 # Split by patient: each patient in exactly one split file.

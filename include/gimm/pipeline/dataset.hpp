@@ -144,6 +144,32 @@ inline std::string two_digits(std::size_t n) {
   return (n < 10 ? "0" : "") + std::to_string(n);
 }
 
+/// Every centerline point of the system in one view (column arrays, in the order of
+/// centerlines.json's branches and points).
+inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
+                                       const std::vector<ProjectedPoint>& view) {
+  nlohmann::json u = nlohmann::json::array(), v = u, depth = u, in_image = u, on_mask = u,
+                 overlap = u, branch = u, index = u;
+  for (std::size_t n = 0; n < points.size(); ++n) {
+    u.push_back(view[n].uv.x());
+    v.push_back(view[n].uv.y());
+    depth.push_back(view[n].depth);
+    in_image.push_back(view[n].in_image ? 1 : 0);
+    on_mask.push_back(view[n].on_mask ? 1 : 0);
+    overlap.push_back(view[n].overlap);
+    branch.push_back(points[n].branch);
+    index.push_back(points[n].index);
+  }
+  return {{"u", u},
+          {"v", v},
+          {"depth_mm", depth},
+          {"in_image", in_image},
+          {"on_mask", on_mask},
+          {"overlap", overlap},
+          {"branch", branch},
+          {"point", index}};
+}
+
 inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
                                 const SampledView& b, const std::string& name_a,
                                 const std::string& name_b) {
@@ -206,12 +232,13 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     so.system = system;
     so.min_spur_mm = o.min_spur_mm;
     const CenterlineTree tree = extract_centerlines(mask, so, "patient " + src.id);
-    const auto points = flatten_centerlines(tree);
     const int shift = static_cast<int>(all.branches.size());
     for (auto b : tree.branches) {
       if (b.parent >= 0) b.parent += shift;
       all.branches.push_back(std::move(b));
     }
+    // Branch indices in the labels refer to centerlines.json (both systems).
+    const auto points = flatten_centerlines(all, system);
     ContrastRecipe recipe;
     recipe.preset = o.recipe;
     const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
@@ -274,6 +301,8 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       cj["view_name"] = view_class(plan.views[v].view_class).name;
       cj["system"] = to_string(system);
       write_json_file(dir / "views" / (name + ".camera.json"), cj);
+      write_json_file(dir / "views" / (name + ".points.json"),
+                      detail::view_points_json(points, projected.back()), -1);
       cameras.push_back(camera);
       names.push_back(name);
     }
