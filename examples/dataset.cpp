@@ -16,6 +16,7 @@
 
 #include "cli_common.hpp"
 #include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/reference_export.hpp"
 
 namespace fs = std::filesystem;
 
@@ -94,6 +95,13 @@ void remove_stale_temporaries(const fs::path& out) {
   for (const auto& p : stale) fs::remove(p);
 }
 
+/// --export reference: the released dataset's layout in OUT/reference.
+void export_if_asked(const std::string& format, const fs::path& out) {
+  if (format.empty()) return;
+  gimm::export_reference(out, out / "reference");
+  std::printf("gimm-dataset: reference layout -> %s\n", (out / "reference").c_str());
+}
+
 int merge(const fs::path& out) {
   std::vector<fs::path> shards;
   for (const auto& e : fs::directory_iterator(out)) {
@@ -145,6 +153,7 @@ int main(int argc, char** argv) {
                                       phantom_size = "small";
   int phantom_count = 0;
   bool quiet = false;
+  std::string export_format;
   app.add_option("--input", input, "folder of ImageCAS-style N.img.nii.gz + N.label.nii.gz");
   app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
       ->check(CLI::PositiveNumber);
@@ -170,10 +179,19 @@ int main(int argc, char** argv) {
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
   app.add_flag("--quiet", quiet, "no progress line");
   flags.add(app, options.carm, false);
+  app.add_option("--export", export_format,
+                 "also write OUT/reference in the released dataset's layout")
+      ->check(CLI::IsMember({"reference"}));
   auto* merge_cmd = app.add_subcommand("merge", "join shard manifests into manifest.json");
   merge_cmd->add_option("--out", out, "the dataset directory the shards wrote to")->required();
+  merge_cmd->add_option("--export", export_format, "also write OUT/reference (reference layout)")
+      ->check(CLI::IsMember({"reference"}));
   return gimm::cli::run(app, argc, argv, [&] {
-    if (*merge_cmd) return merge(out);
+    if (*merge_cmd) {
+      const int status = merge(out);
+      export_if_asked(export_format, out);
+      return status;
+    }
     GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");
     GIMM_CHECK(input.empty() != (phantom_count == 0),
                "gimm-dataset: give exactly one of --input and --phantom");
@@ -251,10 +269,13 @@ int main(int argc, char** argv) {
         {"patients", patients}};
     if (shard.sharded()) {
       manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
+      GIMM_CHECK(export_format.empty(),
+                 "--export with --shard: export after `gimm-dataset merge --export`");
     } else {
       write_splits(out, patients);
     }
     gimm::write_json_file(fs::path(out) / shard.manifest_name(), manifest);
+    if (!shard.sharded()) export_if_asked(export_format, out);
     std::size_t views = 0, pairs = 0, labels = 0;
     for (const auto& p : patients)
       if (p.value("status", "") == "ok")

@@ -214,9 +214,10 @@ TEST_CASE("Injected coronaries appear in the DRR exactly where their centerlines
           for (int du = -3; du <= 3; ++du)
             if (near.contains(v + dv, u + du)) near(v + dv, u + du) = 1;
         if (br.radii[n] < 1.0 || !near.contains(v, u)) continue;
-        // Expected signal: lumen (1400 HU) replacing faint blood over a chord of at least one
-        // voxel; a quarter of it, within one pixel of the projection, must be there.
-        const double mu_gain = gimm::hu_to_mu(1400) - recipe.soft_weight * gimm::hu_to_mu(45);
+        // Expected signal: lumen (recipe.lumen_hu) replacing faint blood over a chord of at least
+        // one voxel; a quarter of it, within one pixel of the projection, must be there.
+        const double mu_gain =
+            gimm::hu_to_mu(recipe.lumen_hu) - recipe.soft_weight * gimm::hu_to_mu(45);
         const double expected = mu_gain * std::min(2 * br.radii[n], p.label.spacing().minCoeff());
         float best = 0;
         for (int dv = -1; dv <= 1; ++dv)

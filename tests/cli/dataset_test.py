@@ -129,6 +129,20 @@ for how in ["flag", "slurm", "k8s"]:
                                               "GIMM_SHARD_COUNT": "3"})
     run(["merge", "--out", out])
     same_tree(full, out, f"3 shards ({how}) merged")
+# --export reference, directly and after a sharded merge, gives the same reference tree.
+exp = os.path.join(TMP, "export_full")
+run(COMMON + ["--out", exp, "--export", "reference"])
+check(len(os.listdir(os.path.join(exp, "reference", "images"))) == 4 * 27 * 2,
+      "reference export: 2 images per pair")
+for name in ["frame_export_old.json", "train_list.txt", "val_list.txt", "test_list.txt"]:
+    check(os.path.exists(os.path.join(exp, "reference", name)), f"reference export lacks {name}")
+exp_sh = os.path.join(TMP, "export_shards")
+for i in range(2):
+    run(COMMON + ["--out", exp_sh, "--shard", f"{i}/2"])
+run(["merge", "--out", exp_sh, "--export", "reference"])
+same_tree(os.path.join(exp, "reference"), os.path.join(exp_sh, "reference"),
+          "reference export after merge")
+
 out = os.path.join(TMP, "shards_missing")
 run(COMMON + ["--out", out, "--shard", "0/2"])
 proc = run(["merge", "--out", out], ok=False)
