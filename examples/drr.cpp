@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
     options.projector = gimm::parse_projector(projector_name);
     options.step_mm = step_mm;
 
-    const gimm::Volume<float> ct = gimm::read_nifti<float>(volume_path);
+    gimm::Volume<float> ct = gimm::read_nifti<float>(volume_path);
     std::optional<gimm::Volume<std::uint8_t>> injected;
     if (!label_path.empty()) {
       const auto label = gimm::read_nifti<std::uint8_t>(label_path);
@@ -105,9 +105,10 @@ int main(int argc, char** argv) {
       Eigen::Map<Eigen::Vector3d>(flags.isocenter.data()) = centre;
     }
     flags.finish(carm);
+    // --recipe none: the volume already is attenuation; move it rather than copy 4 bytes/voxel.
     const gimm::Volume<float> mu =
         recipe.preset == gimm::ContrastPreset::none
-            ? ct
+            ? std::move(ct)
             : gimm::make_attenuation(ct, injected ? &*injected : nullptr, recipe, volume_path);
     const auto t_loaded = std::chrono::steady_clock::now();
     const gimm::Camerad camera = carm.camera();

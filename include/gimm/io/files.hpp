@@ -18,12 +18,28 @@
 
 namespace gimm {
 
+/// The whole file in one read (an istreambuf_iterator copy runs at ~300 MB/s; this at memory
+/// speed, which is most of the load time of a CT volume).
 inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  GIMM_CHECK_AS(IoError, in, "cannot open '" << path.string() << "': " << std::strerror(errno));
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
-  GIMM_CHECK_AS(IoError, !in.bad(), "error reading '" << path.string() << "'");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  GIMM_CHECK_AS(IoError, f != nullptr,
+                "cannot open '" << path.string() << "': " << std::strerror(errno));
+  std::vector<unsigned char> bytes;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) bytes.resize(static_cast<std::size_t>(size));
+  std::size_t got = bytes.empty() ? 0 : std::fread(bytes.data(), 1, bytes.size(), f);
+  // Files whose size is not known up front (pipes, /proc) or that grew: read on in chunks.
+  unsigned char chunk[1 << 16];
+  for (std::size_t n; (n = std::fread(chunk, 1, sizeof chunk, f)) > 0;) {
+    bytes.resize(got);
+    bytes.insert(bytes.end(), chunk, chunk + n);
+    got = bytes.size();
+  }
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  GIMM_CHECK_AS(IoError, !failed, "error reading '" << path.string() << "'");
+  bytes.resize(got);
   return bytes;
 }
 

@@ -270,6 +270,12 @@ template <class Stored, class T>
 void nifti_decode(const unsigned char* src, const NiftiHeader& header, const std::string& what,
                   T* dst, std::size_t count) {
   const bool scaled = header.scl_slope != 1.0 || header.scl_inter != 0.0;
+  if constexpr (std::is_same_v<Stored, T>) {
+    if (!scaled && !header.byte_swapped) {  // the common case: one copy
+      std::memcpy(dst, src, count * sizeof(T));
+      return;
+    }
+  }
   for (std::size_t n = 0; n < count; ++n) {
     unsigned char raw[sizeof(Stored)];
     std::memcpy(raw, src + n * sizeof(Stored), sizeof(Stored));
