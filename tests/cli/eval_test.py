@@ -1,0 +1,54 @@
+#!/usr/bin/env python3
+"""gimm-baseline + gimm-eval end to end: the oracle at sigma 0 is perfect, noise lowers
+Prec@1 as theory says, the epipolar baseline is scored, --compare joins runs, bad input fails.
+
+Usage: eval_test.py BIN_DIR TMP_DIR
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+BIN, TMP = sys.argv[1], sys.argv[2]
+failures = []
+
+
+def run(name, *args, ok=True):
+    p = subprocess.run([os.path.join(BIN, name), *map(str, args)], capture_output=True, text=True)
+    if ok != (p.returncode == 0):
+        failures.append(f"{name} {args}: exit {p.returncode}: {p.stderr[-500:]}")
+    return p
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+
+
+shutil.rmtree(TMP, ignore_errors=True)
+ds = os.path.join(TMP, "ds")
+run("gimm-dataset", "--phantom", 2, "--out", ds, "--rows", 128, "--cols", 128, "--pixel", 2,
+    "--quiet")
+pooled = {}
+for name, extra in [("o0", ["--method", "oracle", "--sigma", 0]),
+                    ("o2", ["--method", "oracle", "--sigma", 2]),
+                    ("ep", ["--method", "epipolar"])]:
+    run("gimm-baseline", "--dataset", ds, "--out", os.path.join(TMP, "p_" + name), *extra)
+    run("gimm-eval", "--dataset", ds, "--predictions", os.path.join(TMP, "p_" + name), "--out",
+        os.path.join(TMP, "e_" + name), "--name", name)
+    summary = json.load(open(os.path.join(TMP, "e_" + name, "summary.json")))
+    pooled[name] = summary.get("pooled", summary)
+check(pooled["o0"]["prec_1px"] == 1.0 and pooled["o0"]["mean_mm"] == 0.0, f"oracle 0: {pooled['o0']}")
+# sigma = 2 px per axis: P(error <= 1 px) = 1 - exp(-1/8) = 0.118 for the 2D error alone.
+check(0.05 < pooled["o2"]["prec_1px"] < 0.3, f"oracle 2: Prec@1 {pooled['o2']['prec_1px']}")
+check(pooled["ep"]["scored"] > 0 and pooled["ep"]["coverage"] > 0.5, f"epipolar: {pooled['ep']}")
+p = run("gimm-eval", "--compare", *[os.path.join(TMP, "e_" + n) for n in ["o0", "o2", "ep"]])
+check(all(n in p.stdout for n in ["o0", "o2", "ep"]), "compare table names every run")
+p = run("gimm-eval", "--dataset", os.path.join(TMP, "nope"), "--predictions",
+        os.path.join(TMP, "p_o0"), ok=False)
+check("nope" in p.stderr, "missing dataset is named")
+if failures:
+    print("\n".join("FAIL: " + f for f in failures))
+    sys.exit(1)
+print("eval_test: all checks passed")
