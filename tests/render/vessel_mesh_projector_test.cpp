@@ -73,6 +73,14 @@ TEST_CASE("Mesh projector: overlap count, first-hit depth and the voxel path agr
   // The first hit is on the back ball's far side from the detector... i.e. the source side:
   // the source is posterior (+y), so the ball at y = +5 is hit first, about SOD - 5 - 2 mm away.
   CHECK(p.first_hit_mm(row, col) == Approx(750 - 5 - 2).margin(0.6));
+  // Visibility: the source is on the +y side, so the back ball (y = +5) hides the front one.
+  CHECK(projector.unoccluded(camera, back));
+  CHECK_FALSE(projector.unoccluded(camera, front));
+  // A partial trace stops at the point: one passage, a chord of about the ball's radius.
+  const Ray<double> ray = camera.ray(camera.project(back).uv.x(), camera.project(back).uv.y());
+  const MeshRayResult half = projector.trace(ray, (back - ray.origin).dot(ray.direction));
+  CHECK(half.passages == 1);
+  CHECK(half.chord_mm == Approx(2.0).margin(0.4));
 
   // Voxel path: Siddon through the binary mask. Same silhouette, similar chords.
   Volume<float> mask_f(mask.geometry(), 0.0f);

@@ -149,7 +149,7 @@ inline std::string two_digits(std::size_t n) {
 inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
                                        const std::vector<ProjectedPoint>& view) {
   nlohmann::json u = nlohmann::json::array(), v = u, depth = u, in_image = u, on_mask = u,
-                 overlap = u, branch = u, index = u;
+                 overlap = u, visible = u, branch = u, index = u;
   for (std::size_t n = 0; n < points.size(); ++n) {
     u.push_back(view[n].uv.x());
     v.push_back(view[n].uv.y());
@@ -157,6 +157,7 @@ inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
     in_image.push_back(view[n].in_image ? 1 : 0);
     on_mask.push_back(view[n].on_mask ? 1 : 0);
     overlap.push_back(view[n].overlap);
+    visible.push_back(view[n].visible ? 1 : 0);
     branch.push_back(points[n].branch);
     index.push_back(points[n].index);
   }
@@ -166,6 +167,7 @@ inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
           {"in_image", in_image},
           {"on_mask", on_mask},
           {"overlap", overlap},
+          {"visible", visible},
           {"branch", branch},
           {"point", index}};
 }
@@ -294,6 +296,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       }
       write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
       projected.push_back(label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr));
+      if (mesh_mode)
+        for (std::size_t n = 0; n < points.size(); ++n)
+          if (projected.back()[n].in_image)
+            projected.back()[n].visible = mesh_projector->unoccluded(camera, points[n].world);
       for (auto& px : vessel.storage()) px = px ? 255 : 0;
       write_png(dir / "views" / (name + ".mask.png"), vessel);
       nlohmann::json cj = to_json(carm);

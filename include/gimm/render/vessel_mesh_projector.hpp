@@ -87,8 +87,10 @@ class VesselMeshProjector {
     if (device_) rtcReleaseDevice(device_);
   }
 
-  /// Traces one world ray (unit direction, s in mm from its origin, s >= 0).
-  MeshRayResult trace(const Ray<double>& ray) const {
+  /// Traces one world ray (unit direction, s in mm from its origin, s >= 0), up to
+  /// `max_distance` mm (a passage still open there counts up to that point).
+  MeshRayResult trace(const Ray<double>& ray,
+                      double max_distance = std::numeric_limits<double>::infinity()) const {
     MeshRayResult out;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
@@ -103,7 +105,7 @@ class VesselMeshProjector {
       hit.ray.dir_y = static_cast<float>(ray.direction.y());
       hit.ray.dir_z = static_cast<float>(ray.direction.z());
       hit.ray.tnear = static_cast<float>(s);
-      hit.ray.tfar = std::numeric_limits<float>::infinity();
+      hit.ray.tfar = static_cast<float>(max_distance);
       hit.ray.mask = 0xFFFFFFFFu;
       hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene_, &context, &hit);
@@ -124,8 +126,20 @@ class VesselMeshProjector {
       }
       // Next query starts just past this hit (relative step: float precision of t).
       s = t + std::max(1e-4, 1e-6 * t);
+      if (s >= max_distance) break;
     }
+    if (depth > 0 && std::isfinite(max_distance))
+      out.chord_mm += static_cast<float>(max_distance - inside_since);
     return out;
+  }
+
+  /// Whether world point X (inside or near a vessel) is seen by `camera` without another
+  /// vessel passage in front of it: at most one passage (its own) between the source and X.
+  bool unoccluded(const Camerad& camera, const Eigen::Vector3d& X) const {
+    const Eigen::Vector2d uv = camera.project(X).uv;
+    const Ray<double> ray = camera.ray(uv.x(), uv.y());
+    const double distance = (X - ray.origin).dot(ray.direction);
+    return distance <= 0 || trace(ray, distance).passages <= 1;
   }
 
   /// All detector pixels of `camera`, multithreaded over rows, deterministic.
