@@ -6,7 +6,9 @@
 // Prints a Markdown table (Prec@1/3/5 px, 2D and 3D errors, coverage, exact-geometry check);
 // with --out writes summary.json, table.md, worst_pairs.md and topk.tsv (compare: compare.md).
 // A pair without a predictions file counts as a pair with no matches (coverage 0).
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -49,6 +51,36 @@ std::string breakdown_table(const std::string& title, const std::string& column,
   std::string md = "\n### " + title + "\n\n" + gimm::markdown_header(column);
   for (const auto& [key, s] : groups) md += gimm::markdown_row(key, s);
   return md;
+}
+
+/// Top-K curves (2D mean error and Prec@3px against K) of one or more runs as a PNG, through
+/// gnuplot (gnuplot-nox, installed by scripts/install-deps.sh). Written to a temporary name and
+/// renamed; without gnuplot, a warning and no chart.
+void plot_topk(const std::vector<std::pair<fs::path, std::string>>& runs, const fs::path& png) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    std::fprintf(stderr, "gimm-eval: warning: gnuplot not found, no %s\n", png.c_str());
+    return;
+  }
+  std::string left, right;
+  for (const auto& [tsv, name] : runs) {
+    std::string clean = name;
+    clean.erase(std::remove(clean.begin(), clean.end(), '"'), clean.end());
+    const std::string sep = left.empty() ? "" : ", ";
+    left += sep + "\"" + tsv.string() + "\" using 1:5 with linespoints title \"" + clean + "\"";
+    right += sep + "\"" + tsv.string() + "\" using 1:3 with linespoints title \"" + clean + "\"";
+  }
+  const fs::path tmp = png.string() + ".tmp.png", script = png.string() + ".gp";
+  const std::string gp =
+      "set terminal png size 1100,420 noenhanced\nset output \"" + tmp.string() +
+      "\"\nset datafile missing \"-\"\nset multiplot layout 1,2\nset logscale x\nset grid\n"
+      "set key top left\nset xlabel \"K (most confident matches per pair)\"\n"
+      "set ylabel \"2D mean error (px)\"\nplot " +
+      left + "\nset ylabel \"Prec@3px\"\nset yrange [0:1]\nset key bottom left\nplot " + right +
+      "\nunset multiplot\n";
+  gimm::write_file_atomic(script, gp);
+  const int status = std::system(("gnuplot \"" + script.string() + "\"").c_str());
+  GIMM_CHECK(status == 0 && fs::exists(tmp), "gimm-eval: gnuplot failed on " << script.string());
+  fs::rename(tmp, png);
 }
 
 int evaluate(const std::string& dataset, const std::string& predictions, long top_k,
@@ -143,7 +175,9 @@ int evaluate(const std::string& dataset, const std::string& predictions, long to
     gimm::write_file_atomic(fs::path(out) / "table.md", md + extra + curve_md + worst_md);
     gimm::write_file_atomic(fs::path(out) / "worst_pairs.md", worst_md.substr(1));
     gimm::write_file_atomic(fs::path(out) / "topk.tsv", tsv);
-    std::fprintf(stderr, "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv}\n",
+    plot_topk({{fs::path(out) / "topk.tsv", name}}, fs::path(out) / "topk.png");
+    std::fprintf(stderr,
+                 "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv,topk.png}\n",
                  out.c_str());
   }
   return 0;
@@ -172,6 +206,11 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
   if (!out.empty()) {
     fs::create_directories(out);
     gimm::write_file_atomic(fs::path(out) / "compare.md", md);
+    std::vector<std::pair<fs::path, std::string>> curves;
+    for (const auto& run : runs)
+      curves.push_back({fs::path(run) / "topk.tsv",
+                        gimm::read_json_file(fs::path(run) / "summary.json").value("method", run)});
+    plot_topk(curves, fs::path(out) / "compare.png");
   }
   return 0;
 }

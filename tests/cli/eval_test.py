@@ -43,8 +43,12 @@ check(pooled["o0"]["prec_1px"] == 1.0 and pooled["o0"]["mean_mm"] == 0.0, f"orac
 # sigma = 2 px per axis: P(error <= 1 px) = 1 - exp(-1/8) = 0.118 for the 2D error alone.
 check(0.05 < pooled["o2"]["prec_1px"] < 0.3, f"oracle 2: Prec@1 {pooled['o2']['prec_1px']}")
 check(pooled["ep"]["scored"] > 0 and pooled["ep"]["coverage"] > 0.5, f"epipolar: {pooled['ep']}")
-p = run("gimm-eval", "--compare", *[os.path.join(TMP, "e_" + n) for n in ["o0", "o2", "ep"]])
+check(all(os.path.getsize(os.path.join(TMP, "e_" + n, "topk.png")) > 1000 for n in pooled),
+      "every run has its top-K chart")
+p = run("gimm-eval", "--compare", *[os.path.join(TMP, "e_" + n) for n in ["o0", "o2", "ep"]],
+        "--out", os.path.join(TMP, "cmp"))
 check(all(n in p.stdout for n in ["o0", "o2", "ep"]), "compare table names every run")
+check(os.path.getsize(os.path.join(TMP, "cmp", "compare.png")) > 1000, "compare chart")
 p = run("gimm-eval", "--dataset", os.path.join(TMP, "nope"), "--predictions",
         os.path.join(TMP, "p_o0"), ok=False)
 check("nope" in p.stderr, "missing dataset is named")
