@@ -62,19 +62,25 @@ std::int64_t count_crossings(const gimm::Volume<float>& v, const gimm::Camerad& 
   return total;
 }
 
+/// Counters shared by the Siddon and ImageCAS cases: voxel crossings of the exact traversal over
+/// the whole detector, threads, and ns per crossing per core (wall time x threads / crossings).
+void set_crossing_counters(benchmark::State& state, const gimm::Volume<float>& v,
+                           const gimm::Camerad& camera) {
+  const double crossings = static_cast<double>(count_crossings(v, camera));
+  state.counters["crossings"] = crossings;
+  state.counters["threads"] = gimm::max_threads();
+  state.counters["ns_per_crossing_core"] = benchmark::Counter(
+      crossings / (1e9 * gimm::max_threads()),
+      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 void BM_Siddon_256cube_512det(benchmark::State& state) {
   const auto& v = test_volume();
   const auto camera = test_camera(30);
   gimm::DrrOptions options;
   options.projector = gimm::Projector::siddon;
   for (auto _ : state) benchmark::DoNotOptimize(gimm::render_line_integrals(v, camera, options));
-  const double crossings = static_cast<double>(count_crossings(v, camera));
-  state.counters["crossings"] = crossings;
-  state.counters["threads"] = gimm::max_threads();
-  // ns per crossing per core = wall time x threads / crossings (inverted rate).
-  state.counters["ns_per_crossing_core"] = benchmark::Counter(
-      crossings / (1e9 * gimm::max_threads()),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  set_crossing_counters(state, v, camera);
 }
 BENCHMARK(BM_Siddon_256cube_512det)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -106,18 +112,6 @@ const gimm::Volume<float>& phantom_volume() {
                                   "phantom");
   }();
   return volume;
-}
-
-/// Counters shared by the ImageCAS cases: voxel crossings of the exact traversal over the whole
-/// detector, threads, and ns per crossing per core (wall time x threads / crossings).
-void set_crossing_counters(benchmark::State& state, const gimm::Volume<float>& v,
-                           const gimm::Camerad& camera) {
-  const double crossings = static_cast<double>(count_crossings(v, camera));
-  state.counters["crossings"] = crossings;
-  state.counters["threads"] = gimm::max_threads();
-  state.counters["ns_per_crossing_core"] = benchmark::Counter(
-      crossings / (1e9 * gimm::max_threads()),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
 /// LAO 30 / cranial 20 (test_camera(30)), isocentre at the world origin = the phantom grid's

@@ -114,60 +114,54 @@ inline int cube_distance_class(int c) {  // 1 = face, 2 = edge, 3 = corner neigh
   return std::abs(o[0]) + std::abs(o[1]) + std::abs(o[2]);
 }
 
+/// Whether neighbourhood cells a and b are adjacent: one step apart on every axis at most, and
+/// at most `max_class` axes differing (1: 6-adjacency, 3: 26-adjacency).
+inline bool cube_adjacent(int a, int b, int max_class) {
+  const auto& off = cube_offsets();
+  int dist = 0, cheb = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int dd = std::abs(off[a][k] - off[b][k]);
+    dist += dd;
+    cheb = std::max(cheb, dd);
+  }
+  return cheb == 1 && dist <= max_class;
+}
+
+/// Connected components (under `max_class` adjacency) of the cells in `set` that contain a
+/// cell of `seeds`; counting stops at 2, which is all the simple-point test needs.
+inline int cube_components_upto2(std::uint32_t set, std::uint32_t seeds, int max_class) {
+  int components = 0;
+  std::uint32_t seen = 0;
+  for (int s = 0; s < 27; ++s) {
+    if (!(set & seeds & (1u << s)) || (seen >> s & 1)) continue;
+    if (++components > 1) return components;
+    int stack[27], top = 0;
+    stack[top++] = s;
+    seen |= 1u << s;
+    while (top) {
+      const int a = stack[--top];
+      for (int b = 0; b < 27; ++b)
+        if ((set >> b & 1) && !(seen >> b & 1) && cube_adjacent(a, b, max_class)) {
+          seen |= 1u << b;
+          stack[top++] = b;
+        }
+    }
+  }
+  return components;
+}
+
 /// Simple-point test on a 3x3x3 neighbourhood (bit c set = foreground; centre ignored).
 inline bool is_simple(std::uint32_t cube) {
   cube &= ~(1u << 13);
   // 1. Foreground in N26: exactly one 26-connected component.
-  int components = 0;
-  std::uint32_t seen = 0;
-  const auto& off = cube_offsets();
-  auto adjacent = [&](int a, int b, int max_class) {
-    int dist = 0, cheb = 0;
-    for (int k = 0; k < 3; ++k) {
-      const int dd = std::abs(off[a][k] - off[b][k]);
-      dist += dd;
-      cheb = std::max(cheb, dd);
-    }
-    return cheb == 1 && dist <= max_class;
-  };
-  for (int s = 0; s < 27; ++s) {
-    if (!(cube >> s & 1) || (seen >> s & 1)) continue;
-    if (++components > 1) return false;
-    int stack[27], top = 0;
-    stack[top++] = s;
-    seen |= 1u << s;
-    while (top) {
-      const int a = stack[--top];
-      for (int b = 0; b < 27; ++b)
-        if ((cube >> b & 1) && !(seen >> b & 1) && adjacent(a, b, 3)) {
-          seen |= 1u << b;
-          stack[top++] = b;
-        }
-    }
-  }
-  if (components != 1) return false;
+  if (cube_components_upto2(cube, 0x7ffffff, 3) != 1) return false;
   // 2. Background in N18: exactly one 6-component containing a face neighbour of the centre.
-  std::uint32_t background = 0;
-  for (int c = 0; c < 27; ++c)
+  std::uint32_t background = 0, faces = 0;
+  for (int c = 0; c < 27; ++c) {
     if (c != 13 && cube_distance_class(c) <= 2 && !(cube >> c & 1)) background |= 1u << c;
-  seen = 0;
-  components = 0;
-  for (int s = 0; s < 27; ++s) {
-    if (cube_distance_class(s) != 1 || !(background >> s & 1) || (seen >> s & 1)) continue;
-    if (++components > 1) return false;
-    int stack[27], top = 0;
-    stack[top++] = s;
-    seen |= 1u << s;
-    while (top) {
-      const int a = stack[--top];
-      for (int b = 0; b < 27; ++b)
-        if ((background >> b & 1) && !(seen >> b & 1) && adjacent(a, b, 1)) {
-          seen |= 1u << b;
-          stack[top++] = b;
-        }
-    }
+    if (cube_distance_class(c) == 1) faces |= 1u << c;
   }
-  return components == 1;
+  return cube_components_upto2(background, faces, 1) == 1;
 }
 
 }  // namespace detail
