@@ -1,0 +1,107 @@
+#pragma once
+/// Softmax over rows, the dual softmax of coarse matching, and the soft-argmax (expectation)
+/// of fine matching.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+#include "gimm/core/parallel.hpp"
+#include "gimm/nn/tensor.hpp"
+
+namespace gimm::nn {
+
+/// Softmax of each row of a [rows, cols] buffer, max-subtracted for stability.
+inline void softmax_rows_inplace(float* x, std::int64_t rows, std::int64_t cols) {
+  for (std::int64_t r = 0; r < rows; ++r) {
+    float* v = x + r * cols;
+    const float top = *std::max_element(v, v + cols);
+    float sum = 0.0f;
+    for (std::int64_t i = 0; i < cols; ++i) sum += (v[i] = std::exp(v[i] - top));
+    const float inv = 1.0f / sum;
+    for (std::int64_t i = 0; i < cols; ++i) v[i] *= inv;
+  }
+}
+
+/// Reference: conf = softmax over axis 0 (columns) times softmax over axis 1 (rows), each
+/// computed on its own copy.
+inline Tensor dual_softmax_reference(const Tensor& sim) {
+  sim.expect_rank(2, "dual_softmax");
+  const std::int64_t l = sim.dim(0), s = sim.dim(1);
+  Tensor rows = sim, cols({s, l});
+  for (std::int64_t i = 0; i < l; ++i)
+    for (std::int64_t j = 0; j < s; ++j) cols[j * l + i] = sim[i * s + j];
+  softmax_rows_inplace(rows.data(), l, s);
+  softmax_rows_inplace(cols.data(), s, l);
+  for (std::int64_t i = 0; i < l; ++i)
+    for (std::int64_t j = 0; j < s; ++j) rows[i * s + j] *= cols[j * l + i];
+  return rows;
+}
+
+/// Fast path, in place and without a transposed copy: row and column max and exp-sums in two
+/// sweeps, then conf = exp(s - rmax) / rsum * exp(s - cmax) / csum in a third.
+inline void dual_softmax_inplace(Tensor& sim) {
+  sim.expect_rank(2, "dual_softmax");
+  const std::int64_t l = sim.dim(0), s = sim.dim(1);
+  std::vector<float> rmax(static_cast<std::size_t>(l)), rinv(static_cast<std::size_t>(l));
+  std::vector<float> cmax(static_cast<std::size_t>(s), -INFINITY),
+      csum(static_cast<std::size_t>(s), 0.0f);
+  float* x = sim.data();
+  parallel_for(
+      0, l,
+      [&](std::int64_t i) {
+        const float* v = x + i * s;
+        const float top = *std::max_element(v, v + s);
+        float sum = 0.0f;
+        for (std::int64_t j = 0; j < s; ++j) sum += std::exp(v[j] - top);
+        rmax[static_cast<std::size_t>(i)] = top;
+        rinv[static_cast<std::size_t>(i)] = 1.0f / sum;
+      },
+      64);
+  for (std::int64_t i = 0; i < l; ++i)
+    for (std::int64_t j = 0; j < s; ++j)
+      cmax[static_cast<std::size_t>(j)] = std::max(cmax[static_cast<std::size_t>(j)], x[i * s + j]);
+  for (std::int64_t i = 0; i < l; ++i)
+    for (std::int64_t j = 0; j < s; ++j)
+      csum[static_cast<std::size_t>(j)] +=
+          std::exp(x[i * s + j] - cmax[static_cast<std::size_t>(j)]);
+  for (float& c : csum) c = 1.0f / c;
+  parallel_for(
+      0, l,
+      [&](std::int64_t i) {
+        float* v = x + i * s;
+        const float rm = rmax[static_cast<std::size_t>(i)], ri = rinv[static_cast<std::size_t>(i)];
+        for (std::int64_t j = 0; j < s; ++j)
+          v[j] = (std::exp(v[j] - rm) * ri) * (std::exp(v[j] - cmax[static_cast<std::size_t>(j)]) *
+                                               csum[static_cast<std::size_t>(j)]);
+      },
+      64);
+}
+
+/// Expectation of a window x window heat map (a softmax, rows sum to 1) over the grid
+/// linspace(-1, 1, window) in x and y (kornia's spatial_expectation2d, normalised).
+struct Expectation {
+  float x = 0, y = 0;  ///< in [-1, 1]
+  float std = 0;       ///< sqrt(var_x + var_y), a spread of the heat map
+};
+
+inline Expectation soft_argmax(const float* heat, int window) {
+  GIMM_CHECK(window >= 1, "soft_argmax: window must be >= 1, got " << window);
+  Expectation e;
+  float xx = 0, yy = 0;
+  for (int r = 0; r < window; ++r)
+    for (int c = 0; c < window; ++c) {
+      const float gx = window == 1 ? 0.0f : -1.0f + 2.0f * float(c) / float(window - 1);
+      const float gy = window == 1 ? 0.0f : -1.0f + 2.0f * float(r) / float(window - 1);
+      const float w = heat[r * window + c];
+      e.x += w * gx;
+      e.y += w * gy;
+      xx += w * gx * gx;
+      yy += w * gy * gy;
+    }
+  e.std = std::sqrt(std::max(xx - e.x * e.x + yy - e.y * e.y, 1e-10f));
+  return e;
+}
+
+}  // namespace gimm::nn

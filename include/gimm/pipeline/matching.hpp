@@ -1,0 +1,173 @@
+#pragma once
+/// Matching a pair of angiograms: images -> network input -> GIMM matcher -> points back in
+/// image pixels -> epipolar gating -> PairMatches (the gimm-matches/1 predictions format).
+///
+/// Image sizes. Both images must have the same size. The network needs sides that are
+/// multiples of 8, so by default an image runs at its own size, zero-padded on the right and
+/// bottom to the next multiple of 8; matches whose coarse cell lies in the padding are dropped.
+/// With `input_size` N > 0 the image is first resized (bilinear, pixel centres aligned, which
+/// is the exact 2x2 box filter at a factor of 2) so that its longer side is N. Points come back
+/// as u = (u_net + 0.5) W / W_net - 0.5 (pixel centres at integers; docs/evaluation.md).
+///
+/// Gating. With both cameras, F is the exact F of the two views (fundamental_from_cameras);
+/// without, it is estimated from the matches as the reference does (gate_reference). Hard
+/// gating removes the matches it rejects; soft and logit rescale confidences.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "gimm/core/error.hpp"
+#include "gimm/core/image.hpp"
+#include "gimm/geometry/camera.hpp"
+#include "gimm/geometry/epipolar.hpp"
+#include "gimm/geometry/gating.hpp"
+#include "gimm/metrics/matches.hpp"
+#include "gimm/nn/matcher.hpp"
+
+namespace gimm {
+
+struct MatchOptions {
+  int input_size = 0;  ///< 0: the image's own size; N: longer side resized to N (then padded)
+  GateOptions gate{};  ///< mode (hard by default), tau, delta, reference F settings
+};
+
+/// One image as the network sees it.
+struct NetworkInput {
+  nn::Tensor tensor;                       ///< [1, 1, rows, cols], rows and cols multiples of 8
+  int content_rows = 0, content_cols = 0;  ///< the resized image inside the padding
+  double scale_u = 1, scale_v = 1;         ///< image pixels per network pixel
+};
+
+/// Bilinear resampling with pixel centres aligned (PyTorch align_corners=False).
+inline Image<float> resize_bilinear(const Image<float>& image, int rows, int cols) {
+  GIMM_CHECK(rows > 0 && cols > 0, "resize_bilinear: bad size " << cols << "x" << rows);
+  Image<float> out(rows, cols);
+  const double sv = double(image.rows()) / rows, su = double(image.cols()) / cols;
+  for (int r = 0; r < rows; ++r) {
+    const double y = std::clamp((r + 0.5) * sv - 0.5, 0.0, double(image.rows() - 1));
+    const int y0 = int(y), y1 = std::min(y0 + 1, image.rows() - 1);
+    const double wy = y - y0;
+    for (int c = 0; c < cols; ++c) {
+      const double x = std::clamp((c + 0.5) * su - 0.5, 0.0, double(image.cols() - 1));
+      const int x0 = int(x), x1 = std::min(x0 + 1, image.cols() - 1);
+      const double wx = x - x0;
+      const double top = (1 - wx) * image(y0, x0) + wx * image(y0, x1);
+      const double bottom = (1 - wx) * image(y1, x0) + wx * image(y1, x1);
+      out(r, c) = float((1 - wy) * top + wy * bottom);
+    }
+  }
+  return out;
+}
+
+inline NetworkInput to_network_input(const Image<float>& image, int input_size,
+                                     const std::string& name) {
+  GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
+  GIMM_CHECK(input_size >= 0, "input size must be >= 0, got " << input_size);
+  NetworkInput in;
+  Image<float> content = image;
+  if (input_size > 0) {
+    const double scale = double(input_size) / std::max(image.rows(), image.cols());
+    const int rows = std::max(1, int(std::lround(image.rows() * scale)));
+    const int cols = std::max(1, int(std::lround(image.cols() * scale)));
+    if (rows != image.rows() || cols != image.cols()) content = resize_bilinear(image, rows, cols);
+  }
+  in.content_rows = content.rows();
+  in.content_cols = content.cols();
+  GIMM_CHECK(in.content_rows >= 8 && in.content_cols >= 8,
+             name << ": " << in.content_cols << "x" << in.content_rows
+                  << " is too small for the matcher (at least 8x8 pixels)");
+  in.scale_u = double(image.cols()) / in.content_cols;
+  in.scale_v = double(image.rows()) / in.content_rows;
+  const std::int64_t rows = (in.content_rows + 7) / 8 * 8, cols = (in.content_cols + 7) / 8 * 8;
+  in.tensor = nn::Tensor({1, 1, rows, cols});
+  for (int r = 0; r < in.content_rows; ++r)
+    for (int c = 0; c < in.content_cols; ++c) {
+      const float v = content(r, c);
+      GIMM_CHECK(std::isfinite(v), name << ": pixel (" << r << ", " << c << ") is " << v);
+      in.tensor[r * cols + c] = v;
+    }
+  return in;
+}
+
+struct PairMatchResult {
+  PairMatches matches;               ///< image pixels, gated confidence
+  std::string fundamental_source;    ///< "cameras", "matches" or "none" (no gating)
+  std::optional<Eigen::Matrix3d> F;  ///< the F used for gating
+  int network_matches = 0;           ///< from the network, before padding and gating
+  int dropped_in_padding = 0;
+  int dropped_by_gate = 0;
+};
+
+inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>& image_a,
+                                  const Image<float>& image_b, int class_a, int class_b,
+                                  const std::optional<Camerad>& camera_a,
+                                  const std::optional<Camerad>& camera_b,
+                                  const MatchOptions& options) {
+  options.gate.validate();
+  GIMM_CHECK(image_a.rows() == image_b.rows() && image_a.cols() == image_b.cols(),
+             "image B is " << image_b.cols() << "x" << image_b.rows() << " but image A is "
+                           << image_a.cols() << "x" << image_a.rows()
+                           << "; the two views must have the same size");
+  GIMM_CHECK(camera_a.has_value() == camera_b.has_value(),
+             "give both cameras or neither (only camera " << (camera_a ? "A" : "B") << " given)");
+  for (const auto* cam : {&camera_a, &camera_b})
+    if (*cam)
+      GIMM_CHECK((*cam)->rows() == image_a.rows() && (*cam)->cols() == image_a.cols(),
+                 "camera " << (cam == &camera_a ? "A" : "B") << " is for " << (*cam)->cols() << "x"
+                           << (*cam)->rows() << " images, the images are " << image_a.cols() << "x"
+                           << image_a.rows());
+  const NetworkInput a = to_network_input(image_a, options.input_size, "image A");
+  const NetworkInput b = to_network_input(image_b, options.input_size, "image B");
+  const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, class_a, class_b);
+
+  PairMatchResult result;
+  result.network_matches = static_cast<int>(net.i_ids.size());
+  auto in_content = [](const std::array<float, 2>& p, const NetworkInput& in) {
+    return p[0] <= in.content_cols - 1 + 0.5f && p[1] <= in.content_rows - 1 + 0.5f;
+  };
+  auto to_image = [](const std::array<float, 2>& p, const NetworkInput& in) {
+    return Eigen::Vector2d((p[0] + 0.5) * in.scale_u - 0.5, (p[1] + 0.5) * in.scale_v - 0.5);
+  };
+  PairMatches raw;
+  for (std::size_t k = 0; k < net.i_ids.size(); ++k) {
+    if (!in_content(net.points0[k], a) || !in_content(net.points1[k], b)) {
+      ++result.dropped_in_padding;
+      continue;
+    }
+    raw.add(to_image(net.points0[k], a), to_image(net.points1[k], b), net.coarse_confidence[k]);
+  }
+
+  Points2<double> xa(2, raw.size()), xb(2, raw.size());
+  VectorX<double> conf(static_cast<Eigen::Index>(raw.size()));
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    xa.col(k) = raw.points_a[k];
+    xb.col(k) = raw.points_b[k];
+    conf(k) = raw.confidence[k];
+  }
+  GateResult<double> gated;
+  if (options.gate.mode == GateMode::none || raw.size() == 0) {
+    result.fundamental_source = "none";
+    gated.confidence = conf;
+    gated.keep.assign(raw.size(), 1);
+  } else if (camera_a) {
+    result.fundamental_source = "cameras";
+    gated = gate_with_fundamental<double>(fundamental_from_cameras(*camera_a, *camera_b), xa, xb,
+                                          conf, options.gate);
+  } else {
+    gated = gate_reference<double>(xa, xb, conf, options.gate);
+    result.fundamental_source = gated.F ? "matches" : "none";
+  }
+  result.F = gated.F;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (!gated.keep[k]) {
+      ++result.dropped_by_gate;
+      continue;
+    }
+    result.matches.add(raw.points_a[k], raw.points_b[k], gated.confidence(Eigen::Index(k)));
+  }
+  return result;
+}
+
+}  // namespace gimm

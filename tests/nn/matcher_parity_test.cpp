@@ -1,0 +1,150 @@
+// The C++ matcher against PyTorch (tools/train/gimm_model.py) on the committed fixture
+// tests/data/nn/ (regenerate with tools/train/make_parity_fixture.py): same weights, same
+// images -> coarse confidence within 1e-4, the same coarse matches, fine points within 1e-3 px.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "gimm/io/matcher_file.hpp"
+#include "gimm/io/safetensors.hpp"
+
+namespace {
+
+const std::string kFixtureDir = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
+
+gimm::nn::Tensor as_image(const gimm::nn::Tensor& image) {
+  return image.reshaped({1, 1, image.dim(0), image.dim(1)});
+}
+
+}  // namespace
+
+TEST_CASE("matcher: parity with PyTorch on the committed fixture", "[nn][parity]") {
+  const auto expected =
+      gimm::io::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
+  const gimm::nn::Matcher matcher =
+      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+  const int class0 = std::stoi(expected.metadata().at("class0"));
+  const int class1 = std::stoi(expected.metadata().at("class1"));
+  REQUIRE(class0 != class1);  // FiLM must see two different classes
+
+  const gimm::nn::MatcherOutput out =
+      matcher.match(as_image(expected.tensor("image0")), as_image(expected.tensor("image1")),
+                    class0, class1, /*keep_confidence=*/true);
+
+  const gimm::nn::Tensor conf = expected.tensor("confidence");
+  REQUIRE(out.confidence.shape() == conf.shape());
+  double max_diff = 0;
+  for (std::int64_t i = 0; i < conf.numel(); ++i)
+    max_diff = std::max(max_diff, double(std::abs(out.confidence[i] - conf[i])));
+  INFO("coarse confidence max |diff| = " << max_diff);
+  CHECK(max_diff <= 1e-4);
+
+  const gimm::nn::Tensor i_ids = expected.tensor("i_ids"), j_ids = expected.tensor("j_ids");
+  REQUIRE(i_ids.numel() >= 8);  // the fixture must exercise the fine stage
+  REQUIRE(out.i_ids.size() == std::size_t(i_ids.numel()));
+  const gimm::nn::Tensor p0 = expected.tensor("points0"), p1 = expected.tensor("points1");
+  const gimm::nn::Tensor mconf = expected.tensor("mconf");
+  double max_fine = 0;
+  for (std::int64_t k = 0; k < i_ids.numel(); ++k) {
+    CHECK(out.i_ids[std::size_t(k)] == std::int64_t(i_ids[k]));
+    CHECK(out.j_ids[std::size_t(k)] == std::int64_t(j_ids[k]));
+    CHECK(out.coarse_confidence[std::size_t(k)] == Approx(mconf[k]).margin(1e-4));
+    CHECK(out.points0[std::size_t(k)][0] == p0.at(k, 0));
+    CHECK(out.points0[std::size_t(k)][1] == p0.at(k, 1));
+    for (int a = 0; a < 2; ++a)
+      max_fine = std::max(max_fine, double(std::abs(out.points1[std::size_t(k)][a] - p1.at(k, a))));
+  }
+  INFO("fine points max |diff| = " << max_fine << " px");
+  CHECK(max_fine <= 1e-3);
+}
+
+TEST_CASE("matcher: the view class changes the coarse confidences (FiLM is live)", "[nn]") {
+  const auto expected =
+      gimm::io::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
+  const gimm::nn::Matcher matcher =
+      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+  const auto a = as_image(expected.tensor("image0")), b = as_image(expected.tensor("image1"));
+  const auto first = matcher.match(a, b, 3, 7, true);
+  const auto swapped = matcher.match(a, b, 7, 3, true);
+  double diff = 0;
+  for (std::int64_t i = 0; i < first.confidence.numel(); ++i)
+    diff = std::max(diff, double(std::abs(first.confidence[i] - swapped.confidence[i])));
+  CHECK(diff > 1e-4);
+  CHECK_THROWS_WITH(matcher.match(a, b, 12, 0), Catch::Contains("view class 12"));
+  CHECK_THROWS_WITH(matcher.match(a, b, -1, 0), Catch::Contains("view class -1"));
+}
+
+TEST_CASE("matcher: bad inputs are refused with the bad value named", "[nn]") {
+  const gimm::nn::Matcher matcher =
+      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+  const gimm::nn::Tensor good({1, 1, 64, 96});
+  CHECK_THROWS_WITH(matcher.match(good, gimm::nn::Tensor({1, 1, 64, 88})),
+                    Catch::Contains("image 1"));
+  CHECK_THROWS_WITH(
+      matcher.match(gimm::nn::Tensor({1, 1, 60, 96}), gimm::nn::Tensor({1, 1, 60, 96})),
+      Catch::Contains("96x60"));
+  CHECK_THROWS_WITH(
+      matcher.match(gimm::nn::Tensor({1, 2, 64, 96}), gimm::nn::Tensor({1, 2, 64, 96})),
+      Catch::Contains("[1, 2, 64, 96]"));
+}
+
+TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[nn][io]") {
+  const auto weights = gimm::io::SafetensorsFile::load(kFixtureDir + "parity_weights.safetensors");
+  std::vector<gimm::nn::Tensor> tensors;
+  std::vector<std::string> names = weights.names();
+  for (const auto& n : names) tensors.push_back(weights.tensor(n));
+  const std::string dir = std::string(GIMM_TEST_TMP) + "/nn_weights";
+  std::filesystem::create_directories(dir);
+
+  auto write_variant = [&](const std::string& file, const std::string& drop,
+                           const std::string& extra, const std::string& reshape) {
+    std::vector<std::pair<std::string, const gimm::nn::Tensor*>> list;
+    std::vector<gimm::nn::Tensor> reshaped;
+    reshaped.reserve(names.size());
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == drop) continue;
+      if (names[i] == reshape) {
+        reshaped.push_back(tensors[i].reshaped({tensors[i].numel()}));
+        list.emplace_back(names[i], &reshaped.back());
+      } else {
+        list.emplace_back(names[i], &tensors[i]);
+      }
+    }
+    if (!extra.empty()) list.emplace_back(extra, &tensors[0]);
+    gimm::io::write_safetensors(dir + "/" + file, list, weights.metadata());
+    return dir + "/" + file;
+  };
+  CHECK_THROWS_WITH(gimm::io::load_matcher(
+                        write_variant("missing.safetensors", "coarse.layers.1.k.weight", "", "")),
+                    Catch::Contains("coarse.layers.1.k.weight"));
+  CHECK_THROWS_WITH(
+      gimm::io::load_matcher(write_variant("extra.safetensors", "", "backbone.unused.weight", "")),
+      Catch::Contains("backbone.unused.weight"));
+  CHECK_THROWS_WITH(
+      gimm::io::load_matcher(write_variant("shape.safetensors", "", "", "down_proj.weight")),
+      Catch::Contains("down_proj.weight"));
+
+  // A config that disagrees with the tensors (wider coarse stage) fails on the first tensor.
+  auto meta = weights.metadata();
+  const std::string config = meta.at("gimm_config");
+  meta["gimm_config"] = std::string(config).replace(config.find("\"widths\": [8, 16, 32]"),
+                                                    std::string("\"widths\": [8, 16, 32]").size(),
+                                                    "\"widths\": [8, 16, 64]");
+  std::vector<std::pair<std::string, const gimm::nn::Tensor*>> all;
+  for (std::size_t i = 0; i < names.size(); ++i) all.emplace_back(names[i], &tensors[i]);
+  gimm::io::write_safetensors(dir + "/config.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/config.safetensors"),
+                    Catch::Contains("backbone.layer3.0.conv1.0.weight"));
+
+  meta["gimm_config"] = "{not json";
+  gimm::io::write_safetensors(dir + "/badjson.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/badjson.safetensors"),
+                    Catch::Contains("gimm_config"));
+
+  meta.erase("gimm_config");
+  gimm::io::write_safetensors(dir + "/noconfig.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/noconfig.safetensors"),
+                    Catch::Contains("gimm_config"));
+}
