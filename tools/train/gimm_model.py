@@ -236,7 +236,9 @@ class GimmMatcher(nn.Module):
         hc, wc = h // 8, w // 8
         coarse = coarse + sine_encoding(c, hc, wc)[None]
         if self.film is not None:
-            coarse = self.film(coarse, torch.tensor([class0, class1]))
+            classes = (torch.stack([class0, class1]).reshape(2) if isinstance(class0, torch.Tensor)
+                       else torch.tensor([class0, class1]))
+            coarse = self.film(coarse, classes)
         tokens = coarse.flatten(2).transpose(1, 2)                 # [2, L, C]
         f0, f1 = self.coarse(tokens[0:1], tokens[1:2])
 

@@ -5,12 +5,13 @@
 /// q is [N, L, C], k and v are [N, S, C], C = heads x head_dim, head h owns channels
 /// [h D, (h + 1) D). linear_attention_reference evaluates the quadratic sum above directly;
 /// linear_attention factorises it as phi(Q) (phi(K)^T V), which is O((L + S) D^2).
-#include <Eigen/Core>
 #include <cstdint>
+#include <vector>
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
 #include "gimm/nn/activations.hpp"
+#include "gimm/nn/fast_exp.hpp"
 #include "gimm/nn/gemm.hpp"
 #include "gimm/nn/tensor.hpp"
 
@@ -65,23 +66,46 @@ inline Tensor linear_attention_reference(const Tensor& q, const Tensor& k, const
 inline Tensor linear_attention(const Tensor& q, const Tensor& k, const Tensor& v, int heads) {
   detail::check_attention(q, k, v, heads);
   const std::int64_t n = q.dim(0), l = q.dim(1), s = k.dim(1), c = q.dim(2), d = c / heads;
-  const Tensor fq = detail::feature_map(q), fk = detail::feature_map(k);
+  // phi(x) = elu(x) + 1 = x + 1 for x > 0, exp(x) otherwise (vectorised, fast_exp).
+  auto phi = [](const Tensor& x) {
+    Tensor y(x.shape());
+    const float* in = x.data();
+    float* out = y.data();
+    for (std::int64_t i = 0; i < x.numel(); ++i)
+      out[i] = in[i] > 0.0f ? in[i] + 1.0f : fast_exp(in[i]);
+    return y;
+  };
+  const Tensor fq = phi(q), fk = phi(k);
   Tensor out(q.shape());
-  parallel_for(
-      0, n * heads,
-      [&](std::int64_t task) {
-        const std::int64_t b = task / heads, h = task % heads;
-        const auto qm = matrix(fq.data() + b * l * c + h * d, l, d, c);
-        const auto km = matrix(fk.data() + b * s * c + h * d, s, d, c);
-        const auto vm = matrix(v.data() + b * s * c + h * d, s, d, c);
-        auto om = matrix(out.data() + b * l * c + h * d, l, d, c);
-        const RowMatrix kv = km.transpose() * vm;               // [D, D]
-        const Eigen::RowVectorXf key_sum = km.colwise().sum();  // [D]
-        om.noalias() = qm * kv;
-        const Eigen::VectorXf norm = qm * key_sum.transpose();  // [L]
-        for (std::int64_t i = 0; i < l; ++i) om.row(i) /= (norm(i) + kLinearAttentionEps);
-      },
-      1);
+  // Plain loops: heads are small (D = 6..32), where Eigen's dynamic products cost more in
+  // allocations than in arithmetic.
+  parallel_for(0, n * heads, [&](std::int64_t task) {
+    const std::int64_t b = task / heads, h = task % heads;
+    thread_local std::vector<float> kv, key_sum;
+    kv.assign(static_cast<std::size_t>(d * d), 0.0f);
+    key_sum.assign(static_cast<std::size_t>(d), 0.0f);
+    float* __restrict kv_p = kv.data();
+    float* __restrict sum_p = key_sum.data();
+    for (std::int64_t j = 0; j < s; ++j) {
+      const float* __restrict kj = fk.data() + (b * s + j) * c + h * d;
+      const float* __restrict vj = v.data() + (b * s + j) * c + h * d;
+      for (std::int64_t e = 0; e < d; ++e) {
+        sum_p[e] += kj[e];
+        for (std::int64_t f = 0; f < d; ++f) kv_p[e * d + f] += kj[e] * vj[f];
+      }
+    }
+    for (std::int64_t i = 0; i < l; ++i) {
+      const float* __restrict qi = fq.data() + (b * l + i) * c + h * d;
+      float* __restrict oi = out.data() + (b * l + i) * c + h * d;
+      float norm = 0.0f;
+      for (std::int64_t e = 0; e < d; ++e) {
+        norm += qi[e] * sum_p[e];
+        for (std::int64_t f = 0; f < d; ++f) oi[f] += qi[e] * kv_p[e * d + f];
+      }
+      const float inv = 1.0f / (norm + kLinearAttentionEps);
+      for (std::int64_t f = 0; f < d; ++f) oi[f] *= inv;
+    }
+  });
   return out;
 }
 

@@ -163,6 +163,10 @@ inline Tensor conv2d(const Tensor& x, const Conv2d& conv, Activation act = Activ
           for (std::int64_t kx = 0; kx < k; ++kx) {
             float* col = columns.data() + ((c * k + ky) * k + kx) * pixels;
             const float* channel = in + c * h * w;
+            // Output columns whose input column ix = xo s - p + kx lies inside [0, w).
+            const std::int64_t x_lo = std::min(wo, std::max<std::int64_t>(0, (p - kx + s - 1) / s));
+            const std::int64_t last = w - 1 + p - kx;  // largest xo s with ix < w
+            const std::int64_t x_hi = std::max(x_lo, std::min(wo, last < 0 ? 0 : last / s + 1));
             for (std::int64_t y = y0; y < y1; ++y) {
               const std::int64_t iy = y * s - p + ky;
               float* row = col + (y - y0) * wo;
@@ -170,11 +174,14 @@ inline Tensor conv2d(const Tensor& x, const Conv2d& conv, Activation act = Activ
                 std::fill(row, row + wo, 0.0f);
                 continue;
               }
-              const float* src = channel + iy * w;
-              for (std::int64_t xo = 0; xo < wo; ++xo) {
-                const std::int64_t ix = xo * s - p + kx;
-                row[xo] = (ix >= 0 && ix < w) ? src[ix] : 0.0f;
+              const float* src = channel + iy * w - p + kx;  // src[xo s] is input column ix
+              std::fill(row, row + x_lo, 0.0f);
+              if (s == 1) {
+                std::copy(src + x_lo, src + x_hi, row + x_lo);
+              } else {
+                for (std::int64_t xo = x_lo; xo < x_hi; ++xo) row[xo] = src[xo * s];
               }
+              std::fill(row + x_hi, row + wo, 0.0f);
             }
           }
       gemm(conv.weight.data(), rows_k, columns.data(), pixels, dst, plane, cout, pixels, rows_k,

@@ -16,6 +16,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/nn/attention.hpp"
+#include "gimm/nn/coarse_matching.hpp"
 #include "gimm/nn/conv2d.hpp"
 #include "gimm/nn/linear.hpp"
 #include "gimm/nn/positional_encoding.hpp"
@@ -199,12 +200,10 @@ class Matcher {
 
   /// images [2, 1, H, W] -> coarse [2, C3, H/8, W/8] and fine [2, C1, H/2, W/2].
   void backbone(const Tensor& images, Tensor& coarse, Tensor& fine) const {
-    Tensor x1 = conv2d(images, stem_, Activation::relu);
-    for (const Block& b : layers_[0]) x1 = run_block(x1, b);
-    Tensor x2 = x1;
-    for (const Block& b : layers_[1]) x2 = run_block(x2, b);
-    Tensor x3 = x2;
-    for (const Block& b : layers_[2]) x3 = run_block(x3, b);
+    const Tensor stem = conv2d(images, stem_, Activation::relu);
+    const Tensor x1 = run_block(run_block(stem, layers_[0][0]), layers_[0][1]);
+    const Tensor x2 = run_block(run_block(x1, layers_[1][0]), layers_[1][1]);
+    const Tensor x3 = run_block(run_block(x2, layers_[2][0]), layers_[2][1]);
     coarse = conv2d(x3, out3_);
     Tensor up = upsample_bilinear(coarse, x2.dim(2), x2.dim(3));
     Tensor f2 = conv2d(conv2d(x2, out2_, Activation::none, &up), out2_refine_a_, Activation::relu);
@@ -246,15 +245,20 @@ class Matcher {
         linear_attention(linear(x, e.q), linear(source, e.k), linear(source, e.v), heads);
     message = linear(message, e.merge);
     layer_norm_inplace(message, e.norm1_w, e.norm1_b);
-    const std::int64_t c = x.dim(-1), rows = x.numel() / c;
-    Shape cat_shape = x.shape();
-    cat_shape.back() = 2 * c;
-    Tensor cat(cat_shape);
-    for (std::int64_t r = 0; r < rows; ++r) {
-      std::copy(x.data() + r * c, x.data() + (r + 1) * c, cat.data() + r * 2 * c);
-      std::copy(message.data() + r * c, message.data() + (r + 1) * c, cat.data() + r * 2 * c + c);
-    }
-    Tensor out = linear(linear(cat, e.mlp1, true), e.mlp2);
+    // mlp(cat[x, message]) without the concatenation: the first layer's weight [2C, 2C] is
+    // [W_x | W_m], so h = x W_x^T + message W_m^T.
+    const std::int64_t c = x.dim(-1), rows = x.numel() / c, c2 = 2 * c;
+    Shape hidden_shape = x.shape();
+    hidden_shape.back() = c2;
+    Tensor hidden(hidden_shape);
+    parallel_for(0, (rows + 255) / 256, [&](std::int64_t task) {
+      const std::int64_t r0 = task * 256, n = std::min<std::int64_t>(256, rows - r0);
+      float* h = hidden.data() + r0 * c2;
+      gemm(x.data() + r0 * c, c, e.mlp1.weight.data(), c2, h, c2, n, c2, c, true, false);
+      gemm(message.data() + r0 * c, c, e.mlp1.weight.data() + c, c2, h, c2, n, c2, c, true, true);
+      relu_inplace(h, n * c2);
+    });
+    Tensor out = linear(hidden, e.mlp2);
     layer_norm_inplace(out, e.norm2_w, e.norm2_b);
     add_inplace(out, x);
     return out;
@@ -318,33 +322,14 @@ inline MatcherOutput Matcher::match(const Tensor& image0, const Tensor& image1, 
   for (float& v : s1.values()) v *= inv_sqrt_c;
   Tensor conf({l, l});
   gemm(s0.data(), c, s1.data(), c, conf.data(), l, l, l, c, true, false);
-  for (float& v : conf.values()) v /= config_.temperature;
-  dual_softmax_inplace(conf);
+  dual_softmax_inplace(conf, config_.temperature);
 
   // Threshold, border removal, mutual nearest neighbours (row-major order, as torch.nonzero).
-  auto inside = [&](std::int64_t id) {
-    const std::int64_t r = id / wc, col = id % wc, b = config_.border;
-    return r >= b && r < hc - b && col >= b && col < wc - b;
-  };
-  std::vector<float> col_max(static_cast<std::size_t>(l), -1.0f);
-  for (std::int64_t i = 0; i < l; ++i)
-    for (std::int64_t j = 0; j < l; ++j)
-      col_max[static_cast<std::size_t>(j)] =
-          std::max(col_max[static_cast<std::size_t>(j)], conf[i * l + j]);
-  for (std::int64_t i = 0; i < l; ++i) {
-    if (!inside(i)) continue;
-    const float* row = conf.data() + i * l;
-    const float row_max = *std::max_element(row, row + l);
-    for (std::int64_t j = 0; j < l; ++j) {
-      const float v = row[j];
-      if (v > config_.threshold && v == row_max && v == col_max[static_cast<std::size_t>(j)] &&
-          inside(j)) {
-        out.i_ids.push_back(i);
-        out.j_ids.push_back(j);
-        out.coarse_confidence.push_back(v);
-      }
-    }
-  }
+  const std::vector<char> keep = inside_border(hc, wc, config_.border);
+  CoarseMatches coarse_matches = mutual_matches(conf, config_.threshold, keep, keep);
+  out.i_ids = std::move(coarse_matches.i_ids);
+  out.j_ids = std::move(coarse_matches.j_ids);
+  out.coarse_confidence = std::move(coarse_matches.confidence);
   if (keep_confidence) out.confidence = std::move(conf);
 
   const std::int64_t m = static_cast<std::int64_t>(out.i_ids.size());

@@ -8,6 +8,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
+#include "gimm/nn/fast_exp.hpp"
 #include "gimm/nn/tensor.hpp"
 
 namespace gimm::nn {
@@ -39,42 +40,51 @@ inline Tensor dual_softmax_reference(const Tensor& sim) {
   return rows;
 }
 
-/// Fast path, in place and without a transposed copy: row and column max and exp-sums in two
-/// sweeps, then conf = exp(s - rmax) / rsum * exp(s - cmax) / csum in a third.
-inline void dual_softmax_inplace(Tensor& sim) {
+/// Fast path, in place and without a transposed copy: sim / temperature, then row and column
+/// max and exp-sums (rows in parallel, columns in parallel blocks of contiguous columns), then
+/// conf = exp(s - rmax) / rsum * exp(s - cmax) / csum in a last parallel sweep, with the
+/// vectorised fast_exp (the reference uses std::exp).
+inline void dual_softmax_inplace(Tensor& sim, float temperature = 1.0f) {
   sim.expect_rank(2, "dual_softmax");
+  GIMM_CHECK(temperature > 0, "dual_softmax: temperature must be > 0, got " << temperature);
   const std::int64_t l = sim.dim(0), s = sim.dim(1);
   std::vector<float> rmax(static_cast<std::size_t>(l)), rinv(static_cast<std::size_t>(l));
   std::vector<float> cmax(static_cast<std::size_t>(s), -INFINITY),
-      csum(static_cast<std::size_t>(s), 0.0f);
+      cinv(static_cast<std::size_t>(s), 0.0f);
   float* x = sim.data();
   parallel_for(
       0, l,
       [&](std::int64_t i) {
-        const float* v = x + i * s;
+        float* v = x + i * s;
+        for (std::int64_t j = 0; j < s; ++j) v[j] /= temperature;
         const float top = *std::max_element(v, v + s);
         float sum = 0.0f;
-        for (std::int64_t j = 0; j < s; ++j) sum += std::exp(v[j] - top);
+        for (std::int64_t j = 0; j < s; ++j) sum += fast_exp(v[j] - top);
         rmax[static_cast<std::size_t>(i)] = top;
         rinv[static_cast<std::size_t>(i)] = 1.0f / sum;
       },
       64);
-  for (std::int64_t i = 0; i < l; ++i)
-    for (std::int64_t j = 0; j < s; ++j)
-      cmax[static_cast<std::size_t>(j)] = std::max(cmax[static_cast<std::size_t>(j)], x[i * s + j]);
-  for (std::int64_t i = 0; i < l; ++i)
-    for (std::int64_t j = 0; j < s; ++j)
-      csum[static_cast<std::size_t>(j)] +=
-          std::exp(x[i * s + j] - cmax[static_cast<std::size_t>(j)]);
-  for (float& c : csum) c = 1.0f / c;
+  constexpr std::int64_t kBlock = 256;
+  parallel_for(0, (s + kBlock - 1) / kBlock, [&](std::int64_t block) {
+    const std::int64_t j0 = block * kBlock, j1 = std::min(s, j0 + kBlock);
+    float* top = cmax.data() + j0;
+    float* sum = cinv.data() + j0;
+    for (std::int64_t i = 0; i < l; ++i)
+      for (std::int64_t j = j0; j < j1; ++j) top[j - j0] = std::max(top[j - j0], x[i * s + j]);
+    for (std::int64_t i = 0; i < l; ++i)
+      for (std::int64_t j = j0; j < j1; ++j) sum[j - j0] += fast_exp(x[i * s + j] - top[j - j0]);
+    for (std::int64_t j = j0; j < j1; ++j) sum[j - j0] = 1.0f / sum[j - j0];
+  });
+  // exp(v - rmax) exp(v - cmax) as one exp(2v - rmax - cmax): the product of the two softmaxes.
+  const float* col_top = cmax.data();
+  const float* col_inv = cinv.data();
   parallel_for(
       0, l,
       [&](std::int64_t i) {
         float* v = x + i * s;
         const float rm = rmax[static_cast<std::size_t>(i)], ri = rinv[static_cast<std::size_t>(i)];
         for (std::int64_t j = 0; j < s; ++j)
-          v[j] = (std::exp(v[j] - rm) * ri) * (std::exp(v[j] - cmax[static_cast<std::size_t>(j)]) *
-                                               csum[static_cast<std::size_t>(j)]);
+          v[j] = fast_exp((v[j] - rm) + (v[j] - col_top[j])) * (ri * col_inv[j]);
       },
       64);
 }
