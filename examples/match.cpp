@@ -3,7 +3,12 @@
 //              [--class-a ID --class-b ID] [--camera-a A.json --camera-b B.json]
 //              [--gate hard|soft|logit|none] [--tau PX] [--delta PX] [--input-size N]
 //              [--pair ID] [--out matches.json] [--picture pair.png]
-// Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores.
+//   gimm-match --dataset DIR --weights W.safetensors --out PRED_DIR [--split all|train|val|test]
+//              [--geometry cameras|matches] [--gate ...]
+// Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores. The
+// dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
+// from the views unless --geometry matches, which estimates F from the matches as the
+// reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line.
 // Images: 8- or 16-bit PNG, grey or colour (converted to grey), the same size; see
 // include/gimm/pipeline/matching.hpp for padding, resizing and where F comes from.
 #include <algorithm>
@@ -18,6 +23,7 @@
 #include "gimm/io/matcher_file.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/metrics/matches.hpp"
+#include "gimm/metrics/truth.hpp"
 #include "gimm/pipeline/matching.hpp"
 
 namespace {
@@ -59,20 +65,59 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
   return gimm::camera_from_json(gimm::read_json_file(path), path);
 }
 
+/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
+int match_dataset(const gimm::nn::Matcher& matcher, const std::string& dataset,
+                  const std::string& split, bool use_cameras, const gimm::MatchOptions& options,
+                  const std::string& out) {
+  gimm::DatasetReader reader(dataset);
+  const auto ids = reader.pair_ids(split);
+  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t total = 0;
+  for (std::size_t n = 0; n < ids.size(); ++n) {
+    const gimm::PairTruth truth = reader.pair(ids[n]);
+    const std::string patient = ids[n].substr(0, ids[n].find('/'));
+    const std::string views = (reader.root() / "patients" / patient / "views").string() + "/";
+    auto camera = [&](const std::string& view) {
+      return use_cameras ? read_camera(views + view + ".camera.json") : std::nullopt;
+    };
+    gimm::PairMatchResult result =
+        gimm::match_pair(matcher, gimm::read_png_unit(views + truth.view_a + ".png"),
+                         gimm::read_png_unit(views + truth.view_b + ".png"), truth.view_class_a,
+                         truth.view_class_b, camera(truth.view_a), camera(truth.view_b), options);
+    result.matches.pair = ids[n];
+    gimm::write_matches(gimm::matches_path(out, ids[n]), result.matches);
+    total += result.matches.size();
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "\rgimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
+                 ids.size(), seconds / double(n + 1),
+                 seconds / double(n + 1) * double(ids.size() - n - 1));
+  }
+  std::fprintf(stderr, "\n");
+  std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), total, out.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)"};
   app.failure_message(CLI::FailureMessage::help);
   std::string image_a, image_b, weights, camera_a, camera_b, gate = "hard", out, picture, pair;
+  std::string dataset, split = "all", geometry = "cameras";
   int class_a = 0, class_b = 0, input_size = 0;
   gimm::MatchOptions options;
-  app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--image-b", image_b, "view B, PNG, same size as A")
-      ->required()
-      ->check(CLI::ExistingFile);
+  app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
+  app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
+  app.add_option("--dataset", dataset, "match every pair of this gimm-dataset (--out: a folder)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--split", split, "dataset mode: all|train|val|test")
+      ->check(CLI::IsMember({"all", "train", "val", "test"}))
+      ->capture_default_str();
+  app.add_option("--geometry", geometry, "dataset mode: F from the view cameras or the matches")
+      ->check(CLI::IsMember({"cameras", "matches"}))
+      ->capture_default_str();
   app.add_option("--weights", weights, "matcher weights, safetensors")
       ->required()
       ->check(CLI::ExistingFile);
@@ -102,6 +147,15 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
     options.input_size = input_size;
+    if (!dataset.empty()) {
+      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty(),
+                 "--dataset matches a whole dataset; it takes no --image-a/b or --camera-a/b");
+      GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
+      return match_dataset(gimm::io::load_matcher(weights), dataset, split, geometry == "cameras",
+                           options, out);
+    }
+    GIMM_CHECK(!image_a.empty() && !image_b.empty(),
+               "give --image-a and --image-b (or --dataset DIR)");
     const gimm::nn::Matcher matcher = gimm::io::load_matcher(weights);
     const gimm::Image<float> a = gimm::read_png_unit(image_a);
     const gimm::Image<float> b = gimm::read_png_unit(image_b);

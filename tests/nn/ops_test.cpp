@@ -913,3 +913,17 @@ TEST_CASE("sine_encoding: LoFTR's 2D sine encoding", "[nn][encoding]") {
   REQUIRE_THROWS_WITH(sine_encoding(6, 2, 2), Contains("multiple of 4, got 6"));
   REQUIRE_THROWS_WITH(sine_encoding(0, 2, 2), Contains("got 0"));
 }
+
+TEST_CASE("nn ops: empty inputs are refused, not crashed on", "[nn]") {
+  using gimm::nn::Tensor;
+  Tensor x({2, 0});
+  CHECK_THROWS_WITH(gimm::nn::layer_norm_inplace(x, Tensor({0}), Tensor({0})),
+                    Catch::Contains("empty gamma"));
+  CHECK_THROWS_WITH(gimm::nn::dual_softmax_reference(Tensor({3, 0})), Catch::Contains("3 x 0"));
+  Tensor empty_sim({3, 0});
+  CHECK_THROWS_WITH(gimm::nn::dual_softmax_inplace(empty_sim), Catch::Contains("[3, 0]"));
+  CHECK_THROWS_WITH(gimm::nn::upsample_bilinear(Tensor({1, 1, 0, 4}), 2, 8),
+                    Catch::Contains("[1, 1, 0, 4]"));
+  const Tensor none;
+  CHECK_THROWS_WITH(none.at(), Catch::Contains("empty tensor"));
+}

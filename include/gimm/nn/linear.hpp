@@ -86,6 +86,7 @@ inline Tensor linear(const Tensor& x, const Linear& layer, bool relu = false) {
 inline void layer_norm_inplace(Tensor& x, const Tensor& gamma, const Tensor& beta,
                                float eps = 1e-5f) {
   const std::int64_t c = gamma.numel();
+  GIMM_CHECK(c > 0, "layer_norm: empty gamma " << shape_string(gamma.shape()));
   detail::check_rows(x, c, "layer_norm");
   beta.expect_shape(gamma.shape(), "layer_norm beta");
   const std::int64_t rows = x.numel() / c;

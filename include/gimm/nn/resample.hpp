@@ -17,6 +17,7 @@ inline Tensor upsample_bilinear(const Tensor& x, std::int64_t out_h, std::int64_
   x.expect_rank(4, "upsample input");
   GIMM_CHECK(out_h > 0 && out_w > 0, "upsample: bad output size " << out_h << "x" << out_w);
   const std::int64_t n = x.dim(0), c = x.dim(1), h = x.dim(2), w = x.dim(3);
+  GIMM_CHECK(h > 0 && w > 0, "upsample: empty input " << shape_string(x.shape()));
   // float arithmetic, as PyTorch's CPU kernel, so the weights agree to the last bit or two.
   const float sy = out_h > 1 ? float(h - 1) / float(out_h - 1) : 0.0f;
   const float sx = out_w > 1 ? float(w - 1) / float(out_w - 1) : 0.0f;

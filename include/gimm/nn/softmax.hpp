@@ -15,6 +15,8 @@ namespace gimm::nn {
 
 /// Softmax of each row of a [rows, cols] buffer, max-subtracted for stability.
 inline void softmax_rows_inplace(float* x, std::int64_t rows, std::int64_t cols) {
+  GIMM_CHECK(rows >= 0 && cols > 0,
+             "softmax: needs at least one column, got " << rows << " x " << cols);
   for (std::int64_t r = 0; r < rows; ++r) {
     float* v = x + r * cols;
     const float top = *std::max_element(v, v + cols);
@@ -48,6 +50,7 @@ inline void dual_softmax_inplace(Tensor& sim, float temperature = 1.0f) {
   sim.expect_rank(2, "dual_softmax");
   GIMM_CHECK(temperature > 0, "dual_softmax: temperature must be > 0, got " << temperature);
   const std::int64_t l = sim.dim(0), s = sim.dim(1);
+  GIMM_CHECK(l > 0 && s > 0, "dual_softmax: empty matrix " << shape_string(sim.shape()));
   std::vector<float> rmax(static_cast<std::size_t>(l)), rinv(static_cast<std::size_t>(l));
   std::vector<float> cmax(static_cast<std::size_t>(s), -INFINITY),
       cinv(static_cast<std::size_t>(s), 0.0f);

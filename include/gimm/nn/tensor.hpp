@@ -112,6 +112,8 @@ class Tensor {
 
  private:
   std::size_t offset(std::initializer_list<std::int64_t> index) const {
+    GIMM_CHECK(!data_.empty(),
+               "tensor: no element to access in an empty tensor of shape " << shape_string(shape_));
     GIMM_CHECK(static_cast<int>(index.size()) == rank(),
                "tensor: " << index.size() << " indices for shape " << shape_string(shape_));
     std::int64_t flat = 0;
