@@ -11,7 +11,8 @@
 # --seed 0 (PyTorch's default initialisation) with threshold 0, so every mutual match is
 # refined and the fine stage is exercised fully; the three engines must return the same
 # matches (checked: same count, points within 0.01 px).
-# Timing: in-process, median of RUNS pairs after one warm-up; memory: each process's peak RSS
+# Timing: in-process, median of RUNS pairs after one warm-up (PyTorch with OPENBLAS_NUM_THREADS=1,
+# its fastest setting here); memory: each process's peak RSS
 # (getrusage maxrss), one fresh process per engine and size.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -69,7 +70,9 @@ print(json.dumps({"engine": "gimm", "size": int(sys.argv[2]), "median_s": statis
                   "min_s": min(t), "matches": int(runs[-1]["matches"]),
                   "peak_rss_mb": max(b["peak_rss_mb"] for b in runs)}))
 PY
-  $py "$here/run_torch.py" "$out/model.safetensors" "$out/pairs" "$s" "$runs" "$out/dump" >> "$results"
+  # OpenBLAS's own threads on top of PyTorch's two OpenMP threads oversubscribe the two cores
+  # (median 0.16-0.23 s at 256^2 against 0.08 s): PyTorch runs in its best configuration.
+  OPENBLAS_NUM_THREADS=1 $py "$here/run_torch.py" "$out/model.safetensors" "$out/pairs" "$s" "$runs" "$out/dump" >> "$results"
   node "$here/run_ort.mjs" "$out/model_$s.onnx" "$out/pairs" "$s" "$runs" "$out/dump" >> "$results"
 done
 $py "$here/report.py" "$results" "$out/dump" "$out"
