@@ -3,8 +3,8 @@
 # Idempotent: a second run installs nothing and does not touch apt's lists.
 #
 #   scripts/install-deps.sh            build + tests + examples (the default)
-#   scripts/install-deps.sh bench      + side-by-side anchors (plastimatch, OpenCV, gnuplot)
-#   scripts/install-deps.sh train      + PyTorch and NumPy for tools/train
+#   scripts/install-deps.sh bench      + side-by-side anchors (plastimatch, OpenCV, hyperfine, Node/npm)
+#   scripts/install-deps.sh train      + PyTorch (with OpenBLAS) for tools/train
 #   scripts/install-deps.sh all        everything
 set -euo pipefail
 
@@ -24,6 +24,13 @@ for group in "$@"; do
     *) echo "error: install-deps.sh: unknown group '$group' (core|bench|train|all)" >&2; exit 2 ;;
   esac
 done
+
+# The matcher side by side runs ONNX Runtime under Node (onnxruntime-node, from the npm
+# registry, installed by benchmarks/matcher/side_by_side.sh). A Node that brings its own npm
+# (e.g. NodeSource's) is kept; otherwise Debian's nodejs and npm.
+if [[ " ${wanted[*]} " == *" plastimatch "* ]] && ! command -v npm >/dev/null; then
+  wanted+=(nodejs npm)
+fi
 
 missing=()
 for pkg in "${wanted[@]}"; do
