@@ -1,6 +1,7 @@
 // The C++ matcher against PyTorch (tools/train/gimm_model.py) on the committed fixture
 // tests/data/nn/ (regenerate with tools/train/make_parity_fixture.py): same weights, same
 // images -> coarse confidence within 1e-4, the same coarse matches, fine points within 1e-3 px.
+#include <omp.h>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -147,4 +148,33 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   gimm::io::write_safetensors(dir + "/noconfig.safetensors", all, meta);
   CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/noconfig.safetensors"),
                     Catch::Contains("gimm_config"));
+}
+
+TEST_CASE("matcher: the result does not depend on the thread count", "[nn]") {
+  const auto expected =
+      gimm::io::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
+  const gimm::nn::Matcher matcher =
+      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+  // 256 x 256 as well, so that the large products (the 1024 x 1024 similarity) are split
+  // across threads by Eigen.
+  gimm::nn::Tensor big_a({1, 1, 256, 256}), big_b({1, 1, 256, 256});
+  for (int r = 0; r < 256; ++r)
+    for (int c = 0; c < 256; ++c) {
+      big_a.at(0, 0, r, c) = float(0.5 + 0.4 * std::sin(r / 9.0) * std::cos(c / 13.0));
+      big_b.at(0, 0, r, c) = float(0.5 + 0.4 * std::sin((r + 8) / 9.0) * std::cos((c + 16) / 13.0));
+    }
+  for (const auto& [a, b] :
+       {std::pair{as_image(expected.tensor("image0")), as_image(expected.tensor("image1"))},
+        std::pair{big_a, big_b}}) {
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const auto one = matcher.match(a, b, 3, 7, true);
+    omp_set_num_threads(std::max(2, threads));
+    const auto many = matcher.match(a, b, 3, 7, true);
+    omp_set_num_threads(threads);
+    CHECK(one.confidence.values() == many.confidence.values());
+    CHECK(one.i_ids == many.i_ids);
+    CHECK(one.j_ids == many.j_ids);
+    CHECK(one.points1 == many.points1);
+  }
 }
