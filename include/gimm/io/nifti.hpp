@@ -19,9 +19,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -155,14 +158,16 @@ inline Eigen::Matrix<double, 3, 4> nifti_affine(const HeaderFields& h, const std
   return A;
 }
 
-/// Parses and validates the header of a whole (decompressed) file.
-inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
-                                      const std::string& what) {
-  GIMM_CHECK_AS(FormatError, bytes.size() >= kNiftiHeaderSize,
-                "'" << what << "': " << bytes.size()
-                    << " bytes is too short for a NIfTI-1 header (348 bytes)");
+/// Parses and validates a header: `head` holds the file's first `head_size` bytes (at least
+/// the 348 of the header, when the file has them) and `file_size` is the whole (decompressed)
+/// file's size, against which the data size is checked.
+inline NiftiHeader parse_nifti_header(const unsigned char* head, std::size_t head_size,
+                                      std::uint64_t file_size, const std::string& what) {
+  GIMM_CHECK_AS(
+      FormatError, head_size >= kNiftiHeaderSize,
+      "'" << what << "': " << file_size << " bytes is too short for a NIfTI-1 header (348 bytes)");
   std::int32_t sizeof_hdr;
-  std::memcpy(&sizeof_hdr, bytes.data(), 4);
+  std::memcpy(&sizeof_hdr, head, 4);
   NiftiHeader out;
   if (sizeof_hdr != 348) {
     swap_bytes(reinterpret_cast<unsigned char*>(&sizeof_hdr), 4);
@@ -171,13 +176,13 @@ inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
                       << (sizeof_hdr == 540 ? "; NIfTI-2 is not supported" : "") << ")");
     out.byte_swapped = true;
   }
-  const char* magic = reinterpret_cast<const char*>(bytes.data()) + 344;
+  const char* magic = reinterpret_cast<const char*>(head) + 344;
   GIMM_CHECK_AS(FormatError, std::memcmp(magic, "ni1", 4) != 0,
                 "'" << what << "': two-file NIfTI (.hdr/.img) is not supported");
   GIMM_CHECK_AS(FormatError, std::memcmp(magic, "n+1", 4) == 0,
                 "'" << what << "': bad NIfTI-1 magic '" << std::string(magic, strnlen(magic, 4))
                     << "' (expected 'n+1')");
-  const HeaderFields h(bytes.data(), out.byte_swapped);
+  const HeaderFields h(head, out.byte_swapped);
 
   const int ndim = h.get<std::int16_t>(40);
   GIMM_CHECK_AS(FormatError, ndim >= 1 && ndim <= 7,
@@ -236,17 +241,23 @@ inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
 
   const std::uint64_t expected =
       out.vox_offset + static_cast<std::uint64_t>(out.geometry.voxel_count()) * bytes_per_voxel;
-  GIMM_CHECK_AS(FormatError, bytes.size() >= expected,
+  GIMM_CHECK_AS(FormatError, file_size >= expected,
                 "'" << what << "': truncated: dims " << out.geometry.dims[0] << "x"
                     << out.geometry.dims[1] << "x" << out.geometry.dims[2] << " of "
                     << bytes_per_voxel << "-byte voxels need " << expected << " bytes, file has "
-                    << bytes.size());
-  GIMM_CHECK_AS(FormatError, bytes.size() == expected,
-                "'" << what << "': " << bytes.size() - expected
+                    << file_size);
+  GIMM_CHECK_AS(FormatError, file_size == expected,
+                "'" << what << "': " << file_size - expected
                     << " bytes beyond the voxel data: dims " << out.geometry.dims[0] << "x"
                     << out.geometry.dims[1] << "x" << out.geometry.dims[2]
                     << " do not match the data size");
   return out;
+}
+
+/// The same for a whole file in memory.
+inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
+                                      const std::string& what) {
+  return parse_nifti_header(bytes.data(), bytes.size(), bytes.size(), what);
 }
 
 template <class T>
@@ -307,6 +318,35 @@ void put(std::vector<unsigned char>& bytes, std::size_t offset, T value) {
 
 }  // namespace detail
 
+namespace detail {
+/// The fast path of read_nifti: an uncompressed file whose voxels are stored as T, unscaled,
+/// in host byte order, is read with one fread into the volume (no whole-file buffer, no second
+/// copy: half the memory traffic of a 64 MB CT). Anything else: nullopt, and the general path.
+template <class T>
+std::optional<Volume<T>> read_nifti_in_place(const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec || size < kNiftiHeaderSize) return std::nullopt;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) return std::nullopt;
+  unsigned char head[kNiftiHeaderSize];
+  if (std::fread(head, 1, sizeof head, f.get()) != sizeof head ||
+      (head[0] == 0x1f && head[1] == 0x8b))
+    return std::nullopt;
+  const NiftiHeader header = parse_nifti_header(head, sizeof head, size, path.string());
+  if (header.datatype != nifti_datatype_of<T>() || header.byte_swapped || header.scl_slope != 1.0 ||
+      header.scl_inter != 0.0)
+    return std::nullopt;
+  Volume<T> volume(header.geometry);
+  const std::size_t count = volume.size();
+  GIMM_CHECK_AS(IoError,
+                std::fseek(f.get(), static_cast<long>(header.vox_offset), SEEK_SET) == 0 &&
+                    std::fread(volume.data(), sizeof(T), count, f.get()) == count,
+                "error reading the voxels of '" << path.string() << "'");
+  return volume;
+}
+}  // namespace detail
+
 /// Reads the header only (the whole file is still read and, if gzipped, inflated).
 inline NiftiHeader read_nifti_header(const std::filesystem::path& path) {
   auto bytes = read_file_bytes(path);
@@ -319,6 +359,7 @@ inline NiftiHeader read_nifti_header(const std::filesystem::path& path) {
 template <class T>
 Volume<T> read_nifti(const std::filesystem::path& path) {
   const std::string what = path.string();
+  if (auto direct = detail::read_nifti_in_place<T>(path)) return std::move(*direct);
   auto bytes = read_file_bytes(path);
   if (is_gzip(bytes)) bytes = gzip_decompress(bytes, what);
   const NiftiHeader header = detail::parse_nifti_header(bytes, what);

@@ -65,6 +65,9 @@ inline bool png_encode(PngIo& io, png_bytep* rows, int height, int width, int bi
     return false;
   }
   png_set_write_fn(png, &io, png_on_write, png_on_flush);
+  // zlib level 1, as for NIfTI: a 512^2 16-bit angiogram encodes several times faster than at
+  // libpng's default (6) for files a few percent larger; the write is on every render's path.
+  png_set_compression_level(png, 1);
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height),
                bit_depth, color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
