@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 
@@ -148,8 +149,10 @@ int main(int argc, char** argv) {
     options.gate.mode = gimm::parse_gate_mode(gate);
     options.input_size = input_size;
     if (!dataset.empty()) {
-      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty(),
-                 "--dataset matches a whole dataset; it takes no --image-a/b or --camera-a/b");
+      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
+                     picture.empty() && pair.empty() && class_a == 0 && class_b == 0,
+                 "--dataset matches a whole dataset (classes and cameras from its files); it "
+                 "takes no --image-a/b, --camera-a/b, --class-a/b, --pair or --picture");
       GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
       return match_dataset(gimm::io::load_matcher(weights), dataset, split, geometry == "cameras",
                            options, out);
@@ -164,8 +167,14 @@ int main(int argc, char** argv) {
         matcher, a, b, class_a, class_b, read_camera(camera_a), read_camera(camera_b), options);
     const auto matched = std::chrono::steady_clock::now();
     result.matches.pair = pair;
-    if (!out.empty()) gimm::write_matches(out, result.matches);
+    // Both or neither: the picture is written first, and removed if the matches cannot be.
     if (!picture.empty()) write_picture(picture, a, b, result.matches);
+    try {
+      if (!out.empty()) gimm::write_matches(out, result.matches);
+    } catch (...) {
+      if (!picture.empty()) std::filesystem::remove(picture);
+      throw;
+    }
     const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
     std::cout << "gimm-match: " << result.matches.size() << " matches (network "
               << result.network_matches << ", in padding " << result.dropped_in_padding

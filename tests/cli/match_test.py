@@ -133,6 +133,8 @@ cases = [
     ("class", [*base[:6], "--class-a", 12], "view class 12"),
     ("one camera", [*base, "--camera-a", CA], "both cameras"),
     ("camera size", [*base, "--camera-a", CA, "--camera-b", os.path.join(TMP, "c.camera.json")], "camera B"),
+    ("picture dir", [*base, "--picture", os.path.join(TMP, "no", "such", "dir", "p.png")], "p.png"),
+    ("dataset flags", ["--dataset", TMP, "--weights", WEIGHTS, "--class-a", 3], "--class-a"),
 ]
 for name, args, needle in cases:
     out = os.path.join(TMP, f"bad_{name.replace(' ', '_')}.json")

@@ -139,6 +139,13 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/config.safetensors"),
                     Catch::Contains("backbone.layer3.0.conv1.0.weight"));
 
+  meta["gimm_config"] = std::string(config).replace(config.find("\"coarse_heads\": 4"),
+                                                    std::string("\"coarse_heads\": 4").size(),
+                                                    "\"coarse_heads\": 4.9");
+  gimm::io::write_safetensors(dir + "/heads.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/heads.safetensors"),
+                    Catch::Contains("'coarse_heads' must be an integer, got 4.9"));
+
   meta["gimm_config"] = "{not json";
   gimm::io::write_safetensors(dir + "/badjson.safetensors", all, meta);
   CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/badjson.safetensors"),

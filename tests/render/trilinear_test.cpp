@@ -1,4 +1,5 @@
 // Trilinear ray marching: fast vs slow path, convergence as the step shrinks.
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
@@ -81,4 +82,26 @@ TEST_CASE("Trilinear: the line integral of a smooth blob matches the analytic on
   const IndexRay r = to_index_ray(v.geometry(), {{-60, 1.3, -0.7}, {1, 0, 0}});
   const double analytic = 6.0 * std::sqrt(2 * 3.14159265358979) * std::exp(-d2 / 72.0);
   CHECK(trilinear_integral(v, r, 0.05) == Approx(analytic).epsilon(0.01));
+}
+
+TEST_CASE("Trilinear: volumes with a one-voxel side and near-axis rays stay in bounds",
+          "[render][trilinear]") {
+  // A side of one voxel has no interior; rays with direction components of round-off size
+  // (cos 90 deg ~ 6e-17) must not take the unchecked path (it would read past the data).
+  for (const auto& dims : {std::array<int, 3>{4, 4, 1}, {1, 5, 3}, {6, 1, 1}, {2, 2, 2}}) {
+    VolumeGeometry g;
+    g.dims = {dims[0], dims[1], dims[2]};
+    Volume<float> v(g);
+    Rng rng(3);
+    for (auto& x : v.storage()) x = static_cast<float>(rng.uniform());
+    for (double tiny : {0.0, 1e-12, -1e-12, 6e-17}) {
+      IndexRay r;
+      r.origin = glm::dvec3(0.5, -5.0, 0.0);
+      r.direction = glm::dvec3(tiny, 1.0, tiny);
+      for (double step : {0.3, 1.0}) {
+        CHECK(trilinear_integral(v, r, step) ==
+              Approx(trilinear_integral_reference(v, r, step)).epsilon(1e-10).margin(1e-12));
+      }
+    }
+  }
 }

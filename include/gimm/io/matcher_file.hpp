@@ -4,6 +4,7 @@
 /// shape; a file with a missing or an extra tensor is refused, naming it.
 #include <nlohmann/json.hpp>
 #include <string>
+#include <type_traits>
 
 #include "gimm/core/error.hpp"
 #include "gimm/io/safetensors.hpp"
@@ -21,6 +22,13 @@ inline nn::LayerKind layer_kind(const nlohmann::json& j, const std::string& wher
 template <class T>
 T config_value(const nlohmann::json& j, const char* key, const std::string& where) {
   GIMM_CHECK_AS(FormatError, j.contains(key), where << ": missing key '" << key << "'");
+  if constexpr (std::is_same_v<T, int>) {
+    const auto& v = j.at(key);
+    GIMM_CHECK_AS(FormatError,
+                  v.is_number_integer() && v.template get<std::int64_t>() >= -(1LL << 30) &&
+                      v.template get<std::int64_t>() <= (1LL << 30),
+                  where << ": key '" << key << "' must be an integer, got " << v.dump());
+  }
   try {
     return j.at(key).get<T>();
   } catch (const nlohmann::json::exception&) {

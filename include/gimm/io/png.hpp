@@ -125,6 +125,8 @@ inline bool png_decode(PngIo& io, PngDecoded& out) {
     png_set_rgb_to_gray_fixed(png, 1, -1, -1);
   png_set_strip_alpha(png);
   if (png_get_bit_depth(png, info) == 16) png_set_swap(png);
+  // Adam7-interlaced files: libpng de-interlaces when asked and every row is read once per pass.
+  const int passes = png_set_interlace_handling(png);
   png_read_update_info(png, info);
   out.rows = static_cast<int>(png_get_image_height(png, info));
   out.cols = static_cast<int>(png_get_image_width(png, info));
@@ -133,7 +135,9 @@ inline bool png_decode(PngIo& io, PngDecoded& out) {
   if (row_bytes != static_cast<std::size_t>(out.cols) * (out.bit_depth / 8))
     png_error(png, "unexpected row size after conversion to grey");
   out.pixels.resize(row_bytes * static_cast<std::size_t>(out.rows));
-  for (int r = 0; r < out.rows; ++r) png_read_row(png, out.pixels.data() + row_bytes * r, nullptr);
+  for (int pass = 0; pass < passes; ++pass)
+    for (int r = 0; r < out.rows; ++r)
+      png_read_row(png, out.pixels.data() + row_bytes * r, nullptr);
   png_read_end(png, nullptr);
   png_destroy_read_struct(&png, &info, nullptr);
   return true;

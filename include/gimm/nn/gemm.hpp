@@ -2,10 +2,15 @@
 /// gemm: C = A B (+ C) on row-major float buffers, through Eigen.
 ///
 /// Eigen's product kernels are vectorised for the target ISA (build with -march=native to get
-/// AVX2/AVX-512) and fall back to one thread inside an OpenMP parallel region, so callers
-/// decide the parallel split. Every matrix is (pointer, rows, cols, leading dimension).
+/// AVX2/AVX-512). gimm splits products across threads itself, in fixed row blocks: the target
+/// gimm::gimm defines EIGEN_DONT_PARALLELIZE, because Eigen's own OpenMP split chooses its
+/// depth blocking by thread count, so the last bits (and with them mutual-NN ties) would depend
+/// on the number of threads. Every matrix is (pointer, rows, cols, leading dimension).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
+
+#include "gimm/core/parallel.hpp"
 
 namespace gimm::nn {
 
@@ -40,6 +45,17 @@ inline void gemm(const float* a, std::int64_t lda, const float* b, std::int64_t 
     else
       out.noalias() = lhs * rhs;
   }
+}
+
+/// The same product, rows of C in blocks of 128 across threads (same result on any count).
+inline void gemm_rows_parallel(const float* a, std::int64_t lda, const float* b, std::int64_t ldb,
+                               float* c, std::int64_t ldc, std::int64_t m, std::int64_t n,
+                               std::int64_t k, bool b_transposed) {
+  constexpr std::int64_t kBlock = 128;
+  parallel_for(0, (m + kBlock - 1) / kBlock, [&](std::int64_t block) {
+    const std::int64_t r0 = block * kBlock, rows = std::min(kBlock, m - r0);
+    gemm(a + r0 * lda, lda, b, ldb, c + r0 * ldc, ldc, rows, n, k, b_transposed, false);
+  });
 }
 
 }  // namespace gimm::nn

@@ -316,12 +316,12 @@ inline MatcherOutput Matcher::match(const Tensor& image0, const Tensor& image1, 
   transform(coarse_, config_.coarse_heads, f0, f1);
 
   // Dual-softmax confidence, computed as the model does: each side scaled by 1/sqrt(C).
-  const float inv_sqrt_c = 1.0f / std::sqrt(float(c));
+  const float sqrt_c = std::sqrt(float(c));
   Tensor s0 = f0, s1 = f1;
-  for (float& v : s0.values()) v *= inv_sqrt_c;
-  for (float& v : s1.values()) v *= inv_sqrt_c;
+  for (float& v : s0.values()) v /= sqrt_c;
+  for (float& v : s1.values()) v /= sqrt_c;
   Tensor conf({l, l});
-  gemm(s0.data(), c, s1.data(), c, conf.data(), l, l, l, c, true, false);
+  gemm_rows_parallel(s0.data(), c, s1.data(), c, conf.data(), l, l, l, c, true);
   dual_softmax_inplace(conf, config_.temperature);
 
   // Threshold, border removal, mutual nearest neighbours (row-major order, as torch.nonzero).
@@ -372,7 +372,7 @@ inline MatcherOutput Matcher::match(const Tensor& image0, const Tensor& image1, 
   transform(fine_, config_.fine_heads, g0, g1);
 
   // Expectation of the centre pixel's similarity heat map over image 1's window.
-  const float inv_sqrt_cf = 1.0f / std::sqrt(float(cf));
+  const float sqrt_cf = std::sqrt(float(cf));
   const float reach = float(win / 2) * 2.0f;  // window half-width in image pixels
   std::vector<float> heat(static_cast<std::size_t>(ww));
   for (std::int64_t k = 0; k < m; ++k) {
@@ -381,7 +381,7 @@ inline MatcherOutput Matcher::match(const Tensor& image0, const Tensor& image1, 
       const float* other = g1.data() + (k * ww + p) * cf;
       float dot = 0.0f;
       for (std::int64_t ch = 0; ch < cf; ++ch) dot += centre[ch] * other[ch];
-      heat[static_cast<std::size_t>(p)] = dot * inv_sqrt_cf;
+      heat[static_cast<std::size_t>(p)] = dot / sqrt_cf;
     }
     softmax_rows_inplace(heat.data(), 1, ww);
     const Expectation e = soft_argmax(heat.data(), win);

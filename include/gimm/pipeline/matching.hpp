@@ -4,7 +4,8 @@
 ///
 /// Image sizes. Both images must have the same size. The network needs sides that are
 /// multiples of 8, so by default an image runs at its own size, zero-padded on the right and
-/// bottom to the next multiple of 8; matches whose coarse cell lies in the padding are dropped.
+/// bottom to the next multiple of 8; matches with a point outside the image content (in the
+/// padding, or refined past an edge) are dropped.
 /// With `input_size` N > 0 the image is first resized (bilinear, pixel centres aligned, which
 /// is the exact 2x2 box filter at a factor of 2) so that its longer side is N. Points come back
 /// as u = (u_net + 0.5) W / W_net - 0.5 (pixel centres at integers; docs/evaluation.md).
@@ -64,7 +65,7 @@ inline Image<float> resize_bilinear(const Image<float>& image, int rows, int col
 inline NetworkInput to_network_input(const Image<float>& image, int input_size,
                                      const std::string& name) {
   GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
-  GIMM_CHECK(input_size >= 0, "input size must be >= 0, got " << input_size);
+  GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
   NetworkInput in;
   Image<float> content = image;
   if (input_size > 0) {
@@ -125,7 +126,8 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
   PairMatchResult result;
   result.network_matches = static_cast<int>(net.i_ids.size());
   auto in_content = [](const std::array<float, 2>& p, const NetworkInput& in) {
-    return p[0] <= in.content_cols - 1 + 0.5f && p[1] <= in.content_rows - 1 + 0.5f;
+    return p[0] >= -0.5f && p[1] >= -0.5f && p[0] <= in.content_cols - 1 + 0.5f &&
+           p[1] <= in.content_rows - 1 + 0.5f;
   };
   auto to_image = [](const std::array<float, 2>& p, const NetworkInput& in) {
     return Eigen::Vector2d((p[0] + 0.5) * in.scale_u - 0.5, (p[1] + 0.5) * in.scale_v - 0.5);

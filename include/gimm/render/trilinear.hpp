@@ -83,7 +83,9 @@ double trilinear_integral(const Volume<T>& volume, const IndexRay& ray, double s
   const auto full = static_cast<std::int64_t>(std::floor(length / step_mm));
   std::int64_t k_lo = full, k_hi = full;
   double t0, t1;
-  if (clip_to_box(ray, glm::dvec3(1e-6), glm::dvec3(nx - 1 - 1e-6, ny - 1 - 1e-6, nz - 1 - 1e-6),
+  // A side of one voxel has no interior (every sample needs the general sampler).
+  if (nx >= 2 && ny >= 2 && nz >= 2 &&
+      clip_to_box(ray, glm::dvec3(1e-6), glm::dvec3(nx - 1 - 1e-6, ny - 1 - 1e-6, nz - 1 - 1e-6),
                   s_min, t0, t1)) {
     k_lo = std::clamp<std::int64_t>(
         static_cast<std::int64_t>(std::ceil((t0 - s0) / step_mm - 0.5)) + 1, 0, full);
