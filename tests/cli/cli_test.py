@@ -7,32 +7,20 @@ Usage: cli_test.py BIN_DIR TMP_DIR
 import json
 import os
 import shutil
-import subprocess
 import sys
 
 import nibabel as nib
 import numpy as np
 
+from harness import Harness
+
 BIN, TMP = sys.argv[1], sys.argv[2]
-failures = []
+h = Harness(BIN)
+check = h.check
 
 
 def run(*args, ok=True, contains=None):
-    proc = subprocess.run([os.path.join(BIN, args[0]), *map(str, args[1:])],
-                          capture_output=True, text=True)
-    out = proc.stdout + proc.stderr
-    if ok and proc.returncode != 0:
-        failures.append(f"{args}: exit {proc.returncode}: {out[-500:]}")
-    if not ok and proc.returncode == 0:
-        failures.append(f"{args}: expected failure, got exit 0")
-    if contains and contains not in out:
-        failures.append(f"{args}: output lacks {contains!r}: {out[-500:]}")
-    return proc.stdout
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
+    return h.run(*args, ok=ok, contains=contains).stdout
 
 
 shutil.rmtree(TMP, ignore_errors=True)
@@ -148,7 +136,4 @@ for form in ["qform", "sform"]:
               f"{form} marker at view ({primary},{secondary}): image max at (u={u}, v={v}), "
               f"camera projects it to {uv}")
 
-if failures:
-    print("\n".join("FAIL: " + f for f in failures))
-    sys.exit(1)
-print("cli_test: all checks passed")
+h.finish("cli_test")

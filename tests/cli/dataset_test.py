@@ -16,24 +16,18 @@ import time
 
 import numpy as np
 
+from harness import Harness
+
 BIN, TMP = sys.argv[1], sys.argv[2]
 DATASET = os.path.join(BIN, "gimm-dataset")
 COMMON = ["--phantom", "4", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
           "--quiet"]
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
+h = Harness(BIN)
+check = h.check
 
 
 def run(args, env=None, ok=True):
-    proc = subprocess.run([DATASET, *args], capture_output=True, text=True,
-                          env={**os.environ, **(env or {})})
-    if ok and proc.returncode != 0:
-        failures.append(f"{args}: exit {proc.returncode}: {proc.stderr[-800:]}")
-    return proc
+    return h.run("gimm-dataset", *args, env=env, ok=ok)
 
 
 def tree_files(root):
@@ -46,7 +40,7 @@ def tree_files(root):
 def same_tree(a, b, what):
     fa, fb = tree_files(a), tree_files(b)
     if fa != fb:
-        failures.append(f"{what}: file lists differ: {sorted(set(fa) ^ set(fb))[:10]}")
+        check(False, f"{what}: file lists differ: {sorted(set(fa) ^ set(fb))[:10]}")
         return
     diff = [f for f in fa if not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
@@ -178,7 +172,4 @@ if os.access(ro, os.W_OK):  # running as root: permissions are not enforced
 proc = run(COMMON + ["--out", ro], ok=False)
 check(proc.returncode != 0 and "error" in proc.stderr, "unwritable output must fail up front")
 
-if failures:
-    print("\n".join("FAIL: " + f for f in failures))
-    sys.exit(1)
-print("dataset_test: all checks passed")
+h.finish("dataset_test")

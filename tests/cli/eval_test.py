@@ -7,23 +7,13 @@ Usage: eval_test.py BIN_DIR TMP_DIR
 import json
 import os
 import shutil
-import subprocess
 import sys
 
+from harness import Harness
+
 BIN, TMP = sys.argv[1], sys.argv[2]
-failures = []
-
-
-def run(name, *args, ok=True):
-    p = subprocess.run([os.path.join(BIN, name), *map(str, args)], capture_output=True, text=True)
-    if ok != (p.returncode == 0):
-        failures.append(f"{name} {args}: exit {p.returncode}: {p.stderr[-500:]}")
-    return p
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
+h = Harness(BIN)
+run, check = h.run, h.check
 
 
 shutil.rmtree(TMP, ignore_errors=True)
@@ -52,7 +42,4 @@ check(os.path.getsize(os.path.join(TMP, "cmp", "compare.png")) > 1000, "compare 
 p = run("gimm-eval", "--dataset", os.path.join(TMP, "nope"), "--predictions",
         os.path.join(TMP, "p_o0"), ok=False)
 check("nope" in p.stderr, "missing dataset is named")
-if failures:
-    print("\n".join("FAIL: " + f for f in failures))
-    sys.exit(1)
-print("eval_test: all checks passed")
+h.finish("eval_test")

@@ -11,27 +11,17 @@ Usage: match_test.py BIN_DIR TMP_DIR
 import json
 import os
 import shutil
-import subprocess
 import sys
 
 import numpy as np
 
+from harness import Harness
+
 BIN, TMP = sys.argv[1], sys.argv[2]
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 WEIGHTS = os.path.join(ROOT, "tests", "data", "nn", "parity_weights.safetensors")
-failures = []
-
-
-def run(name, *args, ok=True):
-    p = subprocess.run([os.path.join(BIN, name), *map(str, args)], capture_output=True, text=True)
-    if ok != (p.returncode == 0):
-        failures.append(f"{name} {args}: exit {p.returncode}: {p.stderr[-500:]}")
-    return p
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
+h = Harness(BIN)
+run, check = h.run, h.check
 
 
 def fundamental(pa, pb):
@@ -75,7 +65,7 @@ for gate in ("none", "hard", "soft"):
     out = os.path.join(TMP, f"m_{gate}.json")
     p = run("gimm-match", *base, *cams, "--gate", gate, "--out", out, "--pair", "p/x")
     if not os.path.exists(out):
-        failures.append(f"gate {gate}: no output ({p.stderr[-300:]})")
+        check(False, f"gate {gate}: no output ({p.stderr[-300:]})")
         continue
     m = load(out)
     results[gate] = m
@@ -152,7 +142,4 @@ check(len(pairs) > 0 and len(written) == len(pairs), f"dataset mode wrote {len(w
 check("pairs/s" in p.stderr or "s/pair" in p.stderr, "dataset mode printed no progress line")
 run("gimm-eval", "--dataset", ds, "--predictions", pred)
 
-if failures:
-    print("\n".join(failures))
-    sys.exit(1)
-print("match_test: all checks passed")
+h.finish("match_test")
