@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gimm/core/parallel.hpp"
+#include "gimm/nn/softmax.hpp"
 #include "gimm/nn/tensor.hpp"
 
 namespace gimm::nn {
@@ -65,14 +66,7 @@ inline CoarseMatches mutual_matches(const Tensor& conf, float threshold,
   detail::check_match_inputs(conf, keep0, keep1);
   const std::int64_t l = conf.dim(0), s = conf.dim(1);
   const float* x = conf.data();
-  std::vector<float> col_max(static_cast<std::size_t>(s), -INFINITY);
-  constexpr std::int64_t kBlock = 256;
-  parallel_for(0, (s + kBlock - 1) / kBlock, [&](std::int64_t block) {
-    const std::int64_t j0 = block * kBlock, j1 = std::min(s, j0 + kBlock);
-    float* top = col_max.data() + j0;
-    for (std::int64_t i = 0; i < l; ++i)
-      for (std::int64_t j = j0; j < j1; ++j) top[j - j0] = std::max(top[j - j0], x[i * s + j]);
-  });
+  const std::vector<float> col_max = column_maxima(x, l, s);
   // Per row, the columns that qualify (a row can hold several only on exact ties).
   std::vector<std::vector<std::int64_t>> per_row(static_cast<std::size_t>(l));
   parallel_for(

@@ -27,6 +27,29 @@ inline void softmax_rows_inplace(float* x, std::int64_t rows, std::int64_t cols)
   }
 }
 
+/// Runs body(j0, j1) over blocks of 256 contiguous columns in parallel: column reductions of a
+/// row-major matrix that read each row's slice, without a transposed copy.
+template <class Body>
+void parallel_column_blocks(std::int64_t cols, Body&& body) {
+  constexpr std::int64_t kBlock = 256;
+  parallel_for(0, (cols + kBlock - 1) / kBlock, [&](std::int64_t block) {
+    body(block * kBlock, std::min(cols, block * kBlock + kBlock));
+  });
+}
+
+/// Maximum of every column of a row-major [rows, cols] buffer.
+inline std::vector<float> column_maxima(const float* x, std::int64_t rows, std::int64_t cols) {
+  std::vector<float> top(static_cast<std::size_t>(cols), -INFINITY);
+  parallel_column_blocks(cols, [&](std::int64_t j0, std::int64_t j1) {
+    float* __restrict t = top.data() + j0;  // local, unaliased pointers: the loop vectorises
+    for (std::int64_t i = 0; i < rows; ++i) {
+      const float* __restrict row = x + i * cols + j0;
+      for (std::int64_t j = 0; j < j1 - j0; ++j) t[j] = std::max(t[j], row[j]);
+    }
+  });
+  return top;
+}
+
 /// Reference: conf = softmax over axis 0 (columns) times softmax over axis 1 (rows), each
 /// computed on its own copy.
 inline Tensor dual_softmax_reference(const Tensor& sim) {
@@ -52,8 +75,7 @@ inline void dual_softmax_inplace(Tensor& sim, float temperature = 1.0f) {
   const std::int64_t l = sim.dim(0), s = sim.dim(1);
   GIMM_CHECK(l > 0 && s > 0, "dual_softmax: empty matrix " << shape_string(sim.shape()));
   std::vector<float> rmax(static_cast<std::size_t>(l)), rinv(static_cast<std::size_t>(l));
-  std::vector<float> cmax(static_cast<std::size_t>(s), -INFINITY),
-      cinv(static_cast<std::size_t>(s), 0.0f);
+  std::vector<float> cinv(static_cast<std::size_t>(s), 0.0f);
   float* x = sim.data();
   parallel_for(
       0, l,
@@ -67,16 +89,15 @@ inline void dual_softmax_inplace(Tensor& sim, float temperature = 1.0f) {
         rinv[static_cast<std::size_t>(i)] = 1.0f / sum;
       },
       64);
-  constexpr std::int64_t kBlock = 256;
-  parallel_for(0, (s + kBlock - 1) / kBlock, [&](std::int64_t block) {
-    const std::int64_t j0 = block * kBlock, j1 = std::min(s, j0 + kBlock);
-    float* top = cmax.data() + j0;
-    float* sum = cinv.data() + j0;
-    for (std::int64_t i = 0; i < l; ++i)
-      for (std::int64_t j = j0; j < j1; ++j) top[j - j0] = std::max(top[j - j0], x[i * s + j]);
-    for (std::int64_t i = 0; i < l; ++i)
-      for (std::int64_t j = j0; j < j1; ++j) sum[j - j0] += fast_exp(x[i * s + j] - top[j - j0]);
-    for (std::int64_t j = j0; j < j1; ++j) sum[j - j0] = 1.0f / sum[j - j0];
+  const std::vector<float> cmax = column_maxima(x, l, s);
+  parallel_column_blocks(s, [&](std::int64_t j0, std::int64_t j1) {
+    const float* __restrict top = cmax.data() + j0;
+    float* __restrict sum = cinv.data() + j0;
+    for (std::int64_t i = 0; i < l; ++i) {
+      const float* __restrict row = x + i * s + j0;
+      for (std::int64_t j = 0; j < j1 - j0; ++j) sum[j] += fast_exp(row[j] - top[j]);
+    }
+    for (std::int64_t j = 0; j < j1 - j0; ++j) sum[j] = 1.0f / sum[j];
   });
   // exp(v - rmax) exp(v - cmax) as one exp(2v - rmax - cmax): the product of the two softmaxes.
   const float* col_top = cmax.data();
