@@ -194,17 +194,10 @@ inline Image<std::uint8_t> read_png8(const std::filesystem::path& path) {
 /// Reads a PNG as grey in [0, 1]: samples divided by their bit depth's full scale (255 or
 /// 65535), so an 8-bit and a 16-bit copy of one picture give the same values to within 1/255.
 inline Image<float> read_png_unit(const std::filesystem::path& path) {
-  const detail::PngDecoded d = detail::read_png_any(path);
-  Image<float> image(d.rows, d.cols);
-  for (std::size_t p = 0; p < image.size(); ++p) {
-    if (d.bit_depth == 16) {
-      std::uint16_t v;
-      std::memcpy(&v, d.pixels.data() + 2 * p, 2);
-      image.data()[p] = float(v) / 65535.0f;
-    } else {
-      image.data()[p] = float(d.pixels[p]) / 255.0f;
-    }
-  }
+  // v * 257 / 65535 and v / 255 are the same real number, so both round to the same float.
+  const Image<std::uint16_t> wide = read_png16(path);
+  Image<float> image(wide.rows(), wide.cols());
+  for (std::size_t p = 0; p < image.size(); ++p) image.data()[p] = float(wide.data()[p]) / 65535.0f;
   return image;
 }
 
