@@ -116,6 +116,14 @@ def report(out):
             return ORIENT[orient](read_pfm(f"{out}/{scene}_{stem}0000.pfm") * PM_SCALE)
         return np.load(f"{out}/{scene}_{stem}.npy").astype(np.float64)
 
+    def loaded(scene, some_tools):
+        """(label, image) of every tool whose output for `scene` exists."""
+        for label, stem, is_pm in some_tools:
+            try:
+                yield label, load(scene, stem, is_pm)
+            except FileNotFoundError:
+                continue
+
     print("### Orientation (plastimatch image against gimm siddon, same geometry)\n")
     print("| scene, view | best of 8 flips/transposes | mean abs diff | next best |")
     print("| --- | --- | --- | --- |")
@@ -144,11 +152,7 @@ def report(out):
     print("| --- | --- | --- | --- | --- |")
     for scene in ("thorax_ap", "thorax_lao"):
         g = load(scene, "g_siddon", False)
-        for label, stem, is_pm in tools[1:]:
-            try:
-                img = load(scene, stem, is_pm)
-            except FileNotFoundError:
-                continue
+        for label, img in loaded(scene, tools[1:]):
             a, _, r, mx = errors(img, g)
             print(f"| {scene} | {label} | {a:.2e} | {r:.2e} | {mx:.2e} |")
 
@@ -159,11 +163,7 @@ def report(out):
     print("| volume | tool | mean abs error | mean signed error | mean rel. error | max abs error |")
     print("| --- | --- | --- | --- | --- | --- |")
     for scene, t in truth.items():
-        for label, stem, is_pm in tools:
-            try:
-                img = load(scene, stem, is_pm)
-            except FileNotFoundError:
-                continue
+        for label, img in loaded(scene, tools):
             a, s, r, mx = errors(img, t)
             print(f"| {scene} | {label} | {a:.3e} | {s:+.3e} | {r:.3e} | {mx:.3e} |")
 
