@@ -90,13 +90,17 @@ void BM_Trilinear_256cube_512det(benchmark::State& state) {
   gimm::DrrOptions options;
   options.projector = gimm::Projector::trilinear;
   options.step_mm = 0.75 * static_cast<double>(state.range(0)) / 100.0;
+  options.skip_empty_space = state.range(1) != 0;
   for (auto _ : state) benchmark::DoNotOptimize(gimm::render_line_integrals(v, camera, options));
   state.counters["step_mm"] = options.step_mm;
+  state.counters["skip_empty"] = static_cast<double>(options.skip_empty_space);
 }
+// Args: step in % of the voxel, empty-space skipping on (1) or off (0).
 BENCHMARK(BM_Trilinear_256cube_512det)
-    ->Arg(100)
-    ->Arg(50)
-    ->Arg(200)
+    ->Args({100, 1})
+    ->Args({100, 0})
+    ->Args({50, 1})
+    ->Args({200, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -14,6 +14,7 @@
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/volume.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/render/empty_space.hpp"
 #include "gimm/render/ray_volume.hpp"
 #include "gimm/render/siddon.hpp"
 #include "gimm/render/trilinear.hpp"
@@ -34,7 +35,8 @@ inline const char* to_string(Projector p) {
 
 struct DrrOptions {
   Projector projector = Projector::siddon;
-  double step_mm = 0.0;  ///< trilinear step; 0 = the smallest voxel spacing
+  double step_mm = 0.0;          ///< trilinear step; 0 = the smallest voxel spacing
+  bool skip_empty_space = true;  ///< trilinear: jump over blocks of zeros (empty_space.hpp)
 };
 
 /// Line integrals (optical depth, unitless when `mu` is in mm^-1) over the detector of `camera`.
@@ -47,6 +49,9 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
   const RayGenerator rays(camera);
   const IndexSpace to_index(mu.geometry());
   const int cols = camera.cols();
+  // Air blocks are skipped by the ray marcher (exactly; empty_space.hpp).
+  const bool skip = options.projector == Projector::trilinear && options.skip_empty_space;
+  const EmptyBlocks empty = skip ? EmptyBlocks(mu) : EmptyBlocks();
   parallel_for_dynamic(0, camera.rows(), 4, [&](std::int64_t row) {
     float* line = out.data() + row * cols;
     const double v = static_cast<double>(row);
@@ -63,7 +68,7 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
       const IndexRay ray = to_index(rays(col, v));
       line[col] = static_cast<float>(options.projector == Projector::siddon
                                          ? siddon_integral(mu, ray)
-                                         : trilinear_integral(mu, ray, step));
+                                         : trilinear_integral(mu, ray, step, 0.0, &empty));
     }
   });
   return out;
