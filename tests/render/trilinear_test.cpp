@@ -108,49 +108,6 @@ TEST_CASE("Trilinear: volumes with a one-voxel side and near-axis rays stay in b
   }
 }
 
-namespace {
-// Sparse blobs in air: most 8^3 blocks are empty, some are not, and blob edges straddle block
-// faces. Values are strictly zero away from the blobs.
-Volume<float> blobs_in_air(const VolumeGeometry& g, std::uint64_t seed) {
-  Volume<float> v(g, 0.0f);
-  Rng rng(seed);
-  for (int b = 0; b < 6; ++b) {
-    const Eigen::Vector3d c(rng.uniform(0, g.dims[0]), rng.uniform(0, g.dims[1]),
-                            rng.uniform(0, g.dims[2]));
-    const double r = rng.uniform(3.0, 12.0);
-    for (int k = 0; k < g.dims[2]; ++k)
-      for (int j = 0; j < g.dims[1]; ++j)
-        for (int i = 0; i < g.dims[0]; ++i)
-          if ((Eigen::Vector3d(i, j, k) - c).norm() < r)
-            v(i, j, k) += static_cast<float>(rng.uniform(0.5, 1.5));
-  }
-  return v;
-}
-}  // namespace
-
-TEST_CASE("Empty blocks: a block is empty exactly when its cells' voxels are all zero",
-          "[render][trilinear][empty]") {
-  constexpr int B = EmptyBlocks::kSize;
-  VolumeGeometry g;
-  g.dims = {2 * B + 4, 2 * B + 1, B + 3};  // 3 x 2 x 2 blocks of cells, partial on every axis
-  Volume<float> v(g, 0.0f);
-  v(B, 0, 0) = 1.0f;  // voxel B is the +1 neighbour of cell B - 1 (block 0) and in block 1
-  const EmptyBlocks empty(v);
-  CHECK_FALSE(empty.empty_at_cell(0, 0, 0));
-  CHECK_FALSE(empty.empty_at_cell(B - 1, 0, 0));
-  CHECK_FALSE(empty.empty_at_cell(B, 0, 0));
-  CHECK(empty.empty_at_cell(2 * B, 0, 0));
-  CHECK(empty.empty_at_cell(0, B, 0));
-  CHECK(empty.empty_at_cell(0, 0, B));
-  CHECK(empty.empty_fraction() == Approx(10.0 / 12.0));
-  v(B, 0, 0) = 0.0f;
-  v(2 * B + 3, 2 * B, B + 2) = -2.0f;  // the last voxel; negative values are not empty either
-  const EmptyBlocks empty2(v);
-  CHECK(empty2.empty_at_cell(0, 0, 0));
-  CHECK_FALSE(empty2.empty_at_cell(2 * B + 2, 2 * B - 1, B + 1));
-  CHECK(empty2.empty_fraction() == Approx(11.0 / 12.0));
-}
-
 TEST_CASE("Trilinear: the SIMD interior sampler equals the scalar one", "[render][trilinear]") {
   VolumeGeometry g;
   g.dims = {23, 19, 17};
@@ -171,47 +128,4 @@ TEST_CASE("Trilinear: the SIMD interior sampler equals the scalar one", "[render
     detail::interior_samples_scalar(v, r, 0.0, step, 0, n, slow.data());
     for (std::size_t q = 0; q < fast.size(); ++q) REQUIRE(fast[q] == Approx(slow[q]).margin(1e-12));
   }
-}
-
-TEST_CASE("Trilinear: skipping empty blocks is bit-identical to the full walk",
-          "[render][trilinear][empty]") {
-  VolumeGeometry g;
-  g.dims = {70, 53, 41};
-  g.spacing = {0.8, 0.6, 1.1};
-  g.direction = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
-  const Volume<float> v = blobs_in_air(g, 5);
-  const EmptyBlocks empty(v);
-  REQUIRE(empty.empty_fraction() > 0.3);
-  REQUIRE(empty.empty_fraction() < 0.9);
-  Rng rng(17);
-  int non_zero = 0;
-  for (int trial = 0; trial < 3000; ++trial) {
-    IndexRay r;
-    if (trial % 3 == 0) {
-      // Axis-parallel rays on block faces and cell corners (integer and half-block origins).
-      const int axis = trial % 9 / 3;
-      r.origin = glm::dvec3(8.0 * rng.uniform_int(0, 8), 8.0 * rng.uniform_int(0, 6),
-                            rng.uniform_int(0, 40));
-      r.origin[axis] = -3.0;
-      r.direction = glm::dvec3(0.0);
-      r.direction[axis] = 1.0 / g.spacing[axis];
-      if (trial % 2) r.origin[(axis + 1) % 3] += 1e-13;  // a hair off the face
-    } else {
-      const Eigen::Vector3d s(rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(-40, 40));
-      const Eigen::Vector3d t = v.index_to_world(
-          Eigen::Vector3d(rng.uniform(0, 70), rng.uniform(0, 53), rng.uniform(0, 41)));
-      r = to_index_ray(g, {s, (t - s).normalized()});
-    }
-    const double step = rng.uniform(0.05, 2.0);
-    const double full = trilinear_integral(v, r, step);
-    const double skipped = trilinear_integral(v, r, step, 0.0, &empty);
-    // Equal up to rounding: a sample may fall in the vectorised body of one run and in the
-    // scalar tail of another, where the compiler may contract multiply-adds differently
-    // (measured: 2e-16 relative at worst).
-    REQUIRE(skipped == Approx(full).epsilon(1e-13).margin(1e-300));
-    REQUIRE(skipped ==
-            Approx(trilinear_integral_reference(v, r, step)).epsilon(1e-10).margin(1e-12));
-    non_zero += full != 0.0;
-  }
-  CHECK(non_zero > 500);
 }

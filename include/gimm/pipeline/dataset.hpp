@@ -246,9 +246,12 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
     const Volume<float> mu =
         make_attenuation(hu, mesh_mode ? nullptr : &mask, recipe, "patient " + src.id);
-    // The voxel mask projects through its bounding box only (a few % of the CT grid).
-    const Volume<std::uint8_t> mask_box =
-        mesh_mode ? Volume<std::uint8_t>() : crop_to_foreground(mask, 1);
+    // The voxel mask projects through its bounding box only (a few % of the CT grid), as 0/1
+    // floats with its empty blocks found once for all views.
+    const Volume<float> vessel_box =
+        mesh_mode ? Volume<float>() : unit_mask(crop_to_foreground(mask, 1));
+    const EmptyBlocks vessel_blocks = mesh_mode ? EmptyBlocks() : EmptyBlocks(vessel_box);
+    const EmptyBlocks mu_blocks(mu);
     std::optional<VesselMeshProjector> mesh_projector;
     double lumen_gain = 0;  // mm^-1 the lumen adds over the (uninjected) background, mesh mode
     if (mesh_mode) {
@@ -281,6 +284,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       const std::string name = std::string(to_string(system)) + "_" + detail::two_digits(v);
       DrrOptions drr;
       drr.projector = o.projector;
+      drr.empty_blocks = &mu_blocks;
       Image<float> integrals = render_line_integrals(mu, camera, drr);
       Image<std::uint8_t> vessel, overlap;
       if (mesh_mode) {
@@ -292,7 +296,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
         }
         overlap = vp.passages;
       } else {
-        vessel = project_mask(mask_box, camera);
+        vessel = project_unit_mask(vessel_box, camera, 1e-6, &vessel_blocks);
       }
       write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
       projected.push_back(label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr));

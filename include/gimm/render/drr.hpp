@@ -36,8 +36,33 @@ inline const char* to_string(Projector p) {
 struct DrrOptions {
   Projector projector = Projector::siddon;
   double step_mm = 0.0;          ///< trilinear step; 0 = the smallest voxel spacing
-  bool skip_empty_space = true;  ///< trilinear: jump over blocks of zeros (empty_space.hpp)
+  bool skip_empty_space = true;  ///< jump over blocks of zeros (empty_space.hpp); same result
+  /// The empty-block grid of the volume, when one is rendered many times (else built per call).
+  const EmptyBlocks* empty_blocks = nullptr;
 };
+
+namespace detail {
+/// Below this fraction of empty blocks the exact projector walks whole rays: its two-ray
+/// interleave (siddon_integral_pair) gains more than the few skipped blocks would.
+inline constexpr double kSiddonSkipMinEmpty = 0.2;
+
+/// The exact integral of one ray over the occupied blocks only (for_each_occupied_interval).
+template <class T>
+double siddon_integral_skipping(const Volume<T>& mu, const EmptyBlocks& empty,
+                                const IndexRay& ray) {
+  double s_enter, s_exit;
+  const glm::dvec3 half(0.5);
+  const IndexRay shifted{ray.origin + half, ray.direction};  // clip_to_box on [0, n], as Siddon
+  if (!clip_to_box(shifted, glm::dvec3(0.0), glm::dvec3(mu.nx(), mu.ny(), mu.nz()), 0.0, s_enter,
+                   s_exit))
+    return 0.0;
+  double sum = 0.0;
+  for_each_occupied_interval(empty, ray, s_enter, s_exit, [&](double s0, double s1) {
+    sum += siddon_integral(mu, ray, s0, s1);
+  });
+  return sum;
+}
+}  // namespace detail
 
 /// Line integrals (optical depth, unitless when `mu` is in mm^-1) over the detector of `camera`.
 template <class T>
@@ -45,18 +70,26 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
                                    const DrrOptions& options = {}) {
   const double step = options.step_mm > 0 ? options.step_mm : mu.spacing().minCoeff();
   GIMM_CHECK(std::isfinite(step), "render: step must be finite, got " << options.step_mm);
+  GIMM_CHECK(!options.empty_blocks || options.empty_blocks->fits(mu.nx(), mu.ny(), mu.nz()),
+             "render: the empty-block grid was built for another volume than "
+                 << mu.nx() << "x" << mu.ny() << "x" << mu.nz());
   Image<float> out(camera.rows(), camera.cols(), 0.0f);
   const RayGenerator rays(camera);
   const IndexSpace to_index(mu.geometry());
   const int cols = camera.cols();
-  // Air blocks are skipped by the ray marcher (exactly; empty_space.hpp).
-  const bool skip = options.projector == Projector::trilinear && options.skip_empty_space;
-  const EmptyBlocks empty = skip ? EmptyBlocks(mu) : EmptyBlocks();
+  // Blocks of zeros are skipped exactly by both projectors (empty_space.hpp).
+  const EmptyBlocks built = options.skip_empty_space && !options.empty_blocks && mu.size() > 0
+                                ? EmptyBlocks(mu)
+                                : EmptyBlocks();
+  const EmptyBlocks& empty = options.empty_blocks ? *options.empty_blocks : built;
+  const bool skip = options.skip_empty_space && empty.built();
+  const bool siddon = options.projector == Projector::siddon;
+  const bool siddon_skip = siddon && skip && empty.empty_fraction() >= detail::kSiddonSkipMinEmpty;
   parallel_for_dynamic(0, camera.rows(), 4, [&](std::int64_t row) {
     float* line = out.data() + row * cols;
     const double v = static_cast<double>(row);
     int col = 0;
-    if (options.projector == Projector::siddon) {
+    if (siddon && !siddon_skip) {
       for (; col + 1 < cols; col += 2) {  // two rays interleaved (siddon_integral_pair)
         double a = 0, b = 0;
         siddon_integral_pair(mu, to_index(rays(col, v)), to_index(rays(col + 1, v)), a, b);
@@ -66,25 +99,46 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
     }
     for (; col < cols; ++col) {
       const IndexRay ray = to_index(rays(col, v));
-      line[col] = static_cast<float>(options.projector == Projector::siddon
-                                         ? siddon_integral(mu, ray)
-                                         : trilinear_integral(mu, ray, step, 0.0, &empty));
+      double sum;
+      if (siddon)
+        sum = siddon_skip ? detail::siddon_integral_skipping(mu, empty, ray)
+                          : siddon_integral(mu, ray);
+      else
+        sum = trilinear_integral(mu, ray, step, 0.0, skip ? &empty : nullptr);
+      line[col] = static_cast<float>(sum);
     }
   });
   return out;
 }
 
-/// The 2D vessel mask of a binary 3D mask (nonzero = vessel): pixels whose ray crosses at
-/// least `min_chord_mm` of mask voxels (exact Siddon chord through the voxel model).
+/// A binary mask (nonzero = vessel) as 0/1 floats: the chord weights project_mask integrates.
 template <class T>
-Image<std::uint8_t> project_mask(const Volume<T>& mask, const Camerad& camera,
-                                 double min_chord_mm = 1e-6) {
+Volume<float> unit_mask(const Volume<T>& mask) {
   Volume<float> unit(mask.geometry(), 0.0f);
   for (std::size_t n = 0; n < mask.size(); ++n) unit.data()[n] = mask.data()[n] != T(0);
-  const Image<float> chord = render_line_integrals(unit, camera);
+  return unit;
+}
+
+/// The 2D vessel mask of a unit mask (unit_mask): pixels whose ray crosses at least
+/// `min_chord_mm` of vessel voxels (exact Siddon chord through the voxel model). Vessels fill a
+/// few % of their box, so the empty blocks are skipped; pass `empty` (EmptyBlocks(unit)) when
+/// projecting one mask many times.
+inline Image<std::uint8_t> project_unit_mask(const Volume<float>& unit, const Camerad& camera,
+                                             double min_chord_mm = 1e-6,
+                                             const EmptyBlocks* empty = nullptr) {
+  DrrOptions options;
+  options.empty_blocks = empty;
+  const Image<float> chord = render_line_integrals(unit, camera, options);
   Image<std::uint8_t> out(camera.rows(), camera.cols(), 0);
   for (std::size_t p = 0; p < out.size(); ++p) out.data()[p] = chord.data()[p] >= min_chord_mm;
   return out;
+}
+
+/// The same from any binary 3D mask (nonzero = vessel).
+template <class T>
+Image<std::uint8_t> project_mask(const Volume<T>& mask, const Camerad& camera,
+                                 double min_chord_mm = 1e-6) {
+  return project_unit_mask(unit_mask(mask), camera, min_chord_mm);
 }
 
 /// Min-max normalisation to the full 16-bit range (a constant image becomes 0), for PNG output.

@@ -6,7 +6,9 @@
 /// base index i interpolates voxels i and i + 1, so a block is empty when every voxel in
 /// [b B, b B + B] (B + 1 per axis, clipped to the grid) is exactly zero. Every sample whose
 /// base cell lies in an empty block is then exactly 0, and skipping it leaves a sum unchanged
-/// bit for bit (s + 0 == s).
+/// bit for bit (s + 0 == s). For the exact (Siddon) projector a block is the index-space box
+/// [b B, (b + 1) B]^3: every point in it lies in a voxel of [b B, b B + B], all zero, so the
+/// chord through it adds nothing (for_each_occupied_interval).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -55,6 +57,10 @@ class EmptyBlocks {
   }
 
   bool built() const { return !empty_.empty(); }
+  /// Whether this grid was built for a volume of these dimensions.
+  bool fits(int nx, int ny, int nz) const {
+    return built() && bx_ == blocks_along(nx) && by_ == blocks_along(ny) && bz_ == blocks_along(nz);
+  }
   /// Whether the block holding base cell (i, j, k) (each in [0, n - 1)) is empty.
   bool empty_at_cell(int i, int j, int k) const {
     return empty_[index(i >> kShift, j >> kShift, k >> kShift)] != 0;
@@ -63,6 +69,8 @@ class EmptyBlocks {
   bool contains_block(int bi, int bj, int bk) const {
     return bi >= 0 && bj >= 0 && bk >= 0 && bi < bx_ && bj < by_ && bk < bz_;
   }
+  /// Blocks along axis a (0, 1, 2).
+  int blocks(int a) const { return a == 0 ? bx_ : (a == 1 ? by_ : bz_); }
   /// Fraction of blocks that are empty (for reports).
   double empty_fraction() const {
     if (empty_.empty()) return 0.0;
@@ -157,6 +165,53 @@ void for_each_occupied_run(const EmptyBlocks& empty, const IndexRay& ray, double
     if (!empty.contains_block(b[0], b[1], b[2])) break;  // round-off at the grid's edge
   }
   if (!skipping) take(run_begin, k_end);
+}
+
+/// Calls take(s0, s1) for the parameter intervals of [s_begin, s_end] (both finite) where `ray`
+/// (index space: voxel i centred on i) is not inside an empty block, in order, merging
+/// neighbouring occupied blocks. Points before the first block or past the last (the outer half
+/// voxel) belong to the edge block, whose voxels include the edge voxels. The integral of a
+/// piecewise-constant volume over the skipped intervals is exactly zero, so an exact projector
+/// summed over these intervals gives the whole ray's integral (up to rounding).
+template <class Take>
+void for_each_occupied_interval(const EmptyBlocks& empty, const IndexRay& ray, double s_begin,
+                                double s_end, Take&& take) {
+  if (!(s_begin < s_end)) return;
+  constexpr int B = EmptyBlocks::kSize;
+  int b[3], b_step[3];
+  double t_next[3], t_delta[3];
+  const glm::dvec3 start = ray.origin + s_begin * ray.direction;
+  for (int a = 0; a < 3; ++a) {
+    const double d = ray.direction[a];
+    b[a] = std::clamp(static_cast<int>(std::floor(start[a] / B)), 0, empty.blocks(a) - 1);
+    b_step[a] = d > 0 ? 1 : -1;
+    // Crossings of the inner block faces only: past the edge blocks there is nothing to enter.
+    const int face = d > 0 ? b[a] + 1 : b[a];
+    const bool inner = d > 0 ? face < empty.blocks(a) : face > 0;
+    t_delta[a] = d == 0 ? 0.0 : std::abs(B / d);
+    t_next[a] = d == 0 || !inner ? std::numeric_limits<double>::infinity()
+                                 : std::max(s_begin, (face * B - ray.origin[a]) / d);
+  }
+  double run_begin = s_begin;
+  bool occupied = false;  // inside a run of occupied blocks that started at run_begin
+  double t = s_begin;
+  while (t < s_end) {
+    const int a = t_next[0] <= t_next[1] ? (t_next[0] <= t_next[2] ? 0 : 2)
+                                         : (t_next[1] <= t_next[2] ? 1 : 2);
+    const double t_out = std::min(t_next[a], s_end);
+    const bool is_empty = empty.empty_block(b[0], b[1], b[2]);
+    if (!is_empty && !occupied) run_begin = t;
+    if (is_empty && occupied) take(run_begin, t);
+    occupied = !is_empty;
+    t = t_out;
+    if (t >= s_end) break;
+    b[a] += b_step[a];
+    const int face = b_step[a] > 0 ? b[a] + 1 : b[a];
+    t_next[a] = (b_step[a] > 0 ? face < empty.blocks(a) : face > 0)
+                    ? t_next[a] + t_delta[a]
+                    : std::numeric_limits<double>::infinity();
+  }
+  if (occupied) take(run_begin, s_end);
 }
 
 }  // namespace gimm

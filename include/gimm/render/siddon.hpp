@@ -39,14 +39,16 @@ struct JacobsTraversal {
   std::int64_t lin, lx, ly, lz;
   bool done = false;
 
-  JacobsTraversal(const Volume<T>& volume, const IndexRay& ray, double s_min) {
+  JacobsTraversal(const Volume<T>& volume, const IndexRay& ray, double s_min,
+                  double s_max = std::numeric_limits<double>::infinity()) {
     const glm::dvec3 o = ray.origin + 0.5;  // voxel i occupies [i, i+1)
     const glm::dvec3& d = ray.direction;
     const int n[3] = {volume.nx(), volume.ny(), volume.nz()};
     data = volume.data();
     double s_enter;
     if (!clip_to_box({o, d}, glm::dvec3(0.0), glm::dvec3(n[0], n[1], n[2]), s_min, s_enter,
-                     s_exit)) {
+                     s_exit) ||
+        !(s_enter < (s_exit = std::min(s_exit, s_max)))) {
       done = true;
       return;
     }
@@ -111,11 +113,12 @@ struct JacobsTraversal {
 
 }  // namespace detail
 
-/// Line integral (value x mm) of `volume` along `ray` (index space; ray_volume.hpp), s >= s_min,
-/// by Jacobs' incremental traversal (one voxel crossing per step).
+/// Line integral (value x mm) of `volume` along `ray` (index space; ray_volume.hpp) over
+/// s_min <= s <= s_max, by Jacobs' incremental traversal (one voxel crossing per step).
 template <class T>
-double siddon_integral(const Volume<T>& volume, const IndexRay& ray, double s_min = 0.0) {
-  detail::JacobsTraversal<T> t(volume, ray, s_min);
+double siddon_integral(const Volume<T>& volume, const IndexRay& ray, double s_min = 0.0,
+                       double s_max = std::numeric_limits<double>::infinity()) {
+  detail::JacobsTraversal<T> t(volume, ray, s_min, s_max);
   while (!t.done) t.step();
   return t.sum;
 }

@@ -7,7 +7,7 @@
 /// floor((s1 - s0) / step) full steps and one remainder, each sampled at its midpoint and
 /// weighted by its length; it converges as O(step^2) on smooth fields.
 /// trilinear_integral is the fast path (no bounds checks in the interior);
-/// With an EmptyBlocks grid it also jumps over blocks of air (bit-identical result);
+/// with an EmptyBlocks grid it also jumps over blocks of air (same result up to rounding);
 /// trilinear_integral_reference samples with Volume::sample_index (the slow path).
 #include <algorithm>
 #include <cmath>
