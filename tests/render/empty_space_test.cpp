@@ -189,6 +189,7 @@ TEST_CASE("DRR: skipping empty space changes no pixel beyond rounding, for both 
   const Volume<float> v = blobs_in_air(g, 7);
   const Camerad camera = carm_view(48, 50, 25, 15);
   const EmptyBlocks empty(v);
+  REQUIRE(empty.empty_fraction() >= detail::kSiddonSkipMinEmpty);  // both projectors skip
   for (const Projector projector : {Projector::siddon, Projector::trilinear}) {
     DrrOptions whole, skipping, prebuilt;
     whole.projector = skipping.projector = prebuilt.projector = projector;
@@ -224,6 +225,7 @@ TEST_CASE("Vessel mask: the skipping projection equals project_mask", "[render][
   const Camerad camera = carm_view(40, 40, -35, -10);
   const Volume<float> unit = unit_mask(mask);
   const EmptyBlocks empty(unit);
+  REQUIRE(empty.empty_fraction() >= detail::kSiddonSkipMinEmpty);
   const Image<std::uint8_t> a = project_mask(mask, camera);
   const Image<std::uint8_t> b = project_unit_mask(unit, camera, 1e-6, &empty);
   int on = 0;
