@@ -53,8 +53,7 @@ void BM_VoxelMaskPrepared_512(benchmark::State& state) {
   const auto cam = camera();
   const gimm::Volume<float> unit = gimm::unit_mask(s.lca_box);
   const gimm::EmptyBlocks empty(unit);
-  for (auto _ : state)
-    benchmark::DoNotOptimize(gimm::project_unit_mask(unit, cam, 1e-6, &empty));
+  for (auto _ : state) benchmark::DoNotOptimize(gimm::project_unit_mask(unit, cam, 1e-6, &empty));
   state.counters["empty_blocks"] = empty.empty_fraction();
 }
 
