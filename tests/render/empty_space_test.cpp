@@ -54,52 +54,10 @@ TEST_CASE("Empty blocks: a block is empty exactly when its cells' voxels are all
   CHECK(empty2.empty_fraction() == Approx(11.0 / 12.0));
 }
 
-TEST_CASE("Trilinear: skipping empty blocks equals the full walk up to rounding",
-          "[render][trilinear][empty]") {
-  VolumeGeometry g;
-  g.dims = {70, 53, 41};
-  g.spacing = {0.8, 0.6, 1.1};
-  g.direction = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
-  const Volume<float> v = blobs_in_air(g, 5);
-  const EmptyBlocks empty(v);
-  REQUIRE(empty.empty_fraction() > 0.3);
-  REQUIRE(empty.empty_fraction() < 0.9);
-  Rng rng(17);
-  int non_zero = 0;
-  for (int trial = 0; trial < 3000; ++trial) {
-    IndexRay r;
-    if (trial % 3 == 0) {
-      // Axis-parallel rays on block faces and cell corners (integer and half-block origins).
-      const int axis = trial % 9 / 3;
-      r.origin = glm::dvec3(8.0 * rng.uniform_int(0, 8), 8.0 * rng.uniform_int(0, 6),
-                            rng.uniform_int(0, 40));
-      r.origin[axis] = -3.0;
-      r.direction = glm::dvec3(0.0);
-      r.direction[axis] = 1.0 / g.spacing[axis];
-      if (trial % 2) r.origin[(axis + 1) % 3] += 1e-13;  // a hair off the face
-    } else {
-      const Eigen::Vector3d s(rng.uniform(-40, 40), rng.uniform(-40, 40), rng.uniform(-40, 40));
-      const Eigen::Vector3d t = v.index_to_world(
-          Eigen::Vector3d(rng.uniform(0, 70), rng.uniform(0, 53), rng.uniform(0, 41)));
-      r = to_index_ray(g, {s, (t - s).normalized()});
-    }
-    const double step = rng.uniform(0.05, 2.0);
-    const double full = trilinear_integral(v, r, step);
-    const double skipped = trilinear_integral(v, r, step, 0.0, &empty);
-    // Equal up to rounding: a sample may fall in the vectorised body of one run and in the
-    // scalar tail of another, where the compiler may contract multiply-adds differently
-    // (measured: 2e-16 relative at worst).
-    REQUIRE(skipped == Approx(full).epsilon(1e-13).margin(1e-300));
-    REQUIRE(skipped ==
-            Approx(trilinear_integral_reference(v, r, step)).epsilon(1e-10).margin(1e-12));
-    non_zero += full != 0.0;
-  }
-  CHECK(non_zero > 500);
-}
-
 namespace {
-/// Random rays for the skipping tests: one in three axis-parallel, on block faces (multiples
-/// of 8 in index space) or a hair off them; the rest oblique from outside to a random point.
+/// Random rays for the skipping tests: one in three axis-parallel, on block faces or half-way
+/// between them (multiples of 8 in index space; blocks are 16 wide), on the voxel faces next to
+/// them (+-0.5), or a hair off; the rest oblique from outside to a random point.
 IndexRay random_ray(const Volume<float>& v, Rng& rng, int trial) {
   const VolumeGeometry& g = v.geometry();
   if (trial % 3 != 0) {
@@ -115,7 +73,8 @@ IndexRay random_ray(const Volume<float>& v, Rng& rng, int trial) {
   r.origin[axis] = -3.0;
   r.direction = glm::dvec3(0.0);
   r.direction[axis] = 1.0 / g.spacing[axis];
-  if (trial % 2) r.origin[(axis + 1) % 3] += 1e-13;
+  const double offsets[4] = {0.0, 0.5, -0.5, 1e-13};
+  r.origin[(axis + 1) % 3] += offsets[trial / 9 % 4];
   return r;
 }
 
@@ -138,6 +97,30 @@ VolumeGeometry sparse_grid() {
   return g;
 }
 }  // namespace
+
+TEST_CASE("Trilinear: skipping empty blocks equals the full walk up to rounding",
+          "[render][trilinear][empty]") {
+  const Volume<float> v = blobs_in_air(sparse_grid(), 5);
+  const EmptyBlocks empty(v);
+  REQUIRE(empty.empty_fraction() > 0.3);
+  REQUIRE(empty.empty_fraction() < 0.9);
+  Rng rng(17);
+  int non_zero = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const IndexRay r = random_ray(v, rng, trial);
+    const double step = rng.uniform(0.05, 2.0);
+    const double full = trilinear_integral(v, r, step);
+    const double skipped = trilinear_integral(v, r, step, 0.0, &empty);
+    // Equal up to rounding: a sample may fall in the vectorised body of one run and in the
+    // scalar tail of another, where the compiler may contract multiply-adds differently
+    // (measured: 2e-16 relative at worst).
+    REQUIRE(skipped == Approx(full).epsilon(1e-13).margin(1e-300));
+    REQUIRE(skipped ==
+            Approx(trilinear_integral_reference(v, r, step)).epsilon(1e-10).margin(1e-12));
+    non_zero += full != 0.0;
+  }
+  CHECK(non_zero > 500);
+}
 
 TEST_CASE("Siddon: an integral split at any parameter adds up to the whole",
           "[render][siddon][empty]") {
@@ -206,17 +189,24 @@ TEST_CASE("DRR: skipping empty space changes no pixel beyond rounding, for both 
     }
     CHECK(non_zero > 100);
   }
-  // A grid built for another volume is refused.
-  VolumeGeometry small = sparse_grid();
-  small.dims = {20, 20, 20};
-  const EmptyBlocks wrong{Volume<float>(small, 0.0f)};
+  // A grid built for another volume is refused, also one with as many blocks (72 x 55 x 43
+  // and 70 x 53 x 41 both make 5 x 4 x 3).
+  VolumeGeometry other = sparse_grid();
+  other.dims = {72, 55, 43};
+  const EmptyBlocks wrong{Volume<float>(other, 0.0f)};
   DrrOptions bad;
   bad.empty_blocks = &wrong;
-  CHECK_THROWS_WITH(render_line_integrals(v, camera, bad),
+  for (const Projector projector : {Projector::siddon, Projector::trilinear}) {
+    bad.projector = projector;
+    CHECK_THROWS_WITH(render_line_integrals(v, camera, bad),
+                      Catch::Contains("empty-block grid was built for another volume"));
+  }
+  const IndexRay ray{{-3.0, 20.0, 20.0}, {1.0, 0.0, 0.0}};
+  CHECK_THROWS_WITH(trilinear_integral(v, ray, 0.5, 0.0, &wrong),
                     Catch::Contains("empty-block grid was built for another volume"));
 }
 
-TEST_CASE("Vessel mask: the skipping projection equals project_mask", "[render][drr][empty]") {
+TEST_CASE("Vessel mask: the skipping projections equal a full walk", "[render][drr][empty]") {
   VolumeGeometry g = sparse_grid();
   g.origin = -0.5 * Eigen::Vector3d(70 * 0.8, 53 * 0.6, 41 * 1.1);
   const Volume<float> blobs = blobs_in_air(g, 9);
@@ -226,11 +216,15 @@ TEST_CASE("Vessel mask: the skipping projection equals project_mask", "[render][
   const Volume<float> unit = unit_mask(mask);
   const EmptyBlocks empty(unit);
   REQUIRE(empty.empty_fraction() >= detail::kSiddonSkipMinEmpty);
+  DrrOptions whole;
+  whole.skip_empty_space = false;
+  const Image<float> chord = render_line_integrals(unit, camera, whole);
   const Image<std::uint8_t> a = project_mask(mask, camera);
   const Image<std::uint8_t> b = project_unit_mask(unit, camera, 1e-6, &empty);
   int on = 0;
   for (std::size_t p = 0; p < a.size(); ++p) {
-    REQUIRE(a.data()[p] == b.data()[p]);
+    REQUIRE(a.data()[p] == (chord.data()[p] >= 1e-6));
+    REQUIRE(b.data()[p] == a.data()[p]);
     on += a.data()[p];
   }
   CHECK(on > 50);

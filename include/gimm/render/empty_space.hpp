@@ -30,7 +30,10 @@ class EmptyBlocks {
 
   template <class T>
   explicit EmptyBlocks(const Volume<T>& volume)
-      : bx_(blocks_along(volume.nx())),
+      : nx_(volume.nx()),
+        ny_(volume.ny()),
+        nz_(volume.nz()),
+        bx_(blocks_along(volume.nx())),
         by_(blocks_along(volume.ny())),
         bz_(blocks_along(volume.nz())),
         empty_(static_cast<std::size_t>(bx_) * by_ * bz_, 0) {
@@ -58,9 +61,7 @@ class EmptyBlocks {
 
   bool built() const { return !empty_.empty(); }
   /// Whether this grid was built for a volume of these dimensions.
-  bool fits(int nx, int ny, int nz) const {
-    return built() && bx_ == blocks_along(nx) && by_ == blocks_along(ny) && bz_ == blocks_along(nz);
-  }
+  bool fits(int nx, int ny, int nz) const { return built() && nx_ == nx && ny_ == ny && nz_ == nz; }
   /// Whether the block holding base cell (i, j, k) (each in [0, n - 1)) is empty.
   bool empty_at_cell(int i, int j, int k) const {
     return empty_[index(i >> kShift, j >> kShift, k >> kShift)] != 0;
@@ -86,6 +87,7 @@ class EmptyBlocks {
            static_cast<std::size_t>(bx_) *
                (static_cast<std::size_t>(j) + static_cast<std::size_t>(by_) * k);
   }
+  int nx_ = 0, ny_ = 0, nz_ = 0;  // the volume's dimensions (fits)
   int bx_ = 0, by_ = 0, bz_ = 0;
   std::vector<std::uint8_t> empty_;
 };

@@ -30,7 +30,7 @@ namespace detail {
 /// chosen axis would force the state through memory. GCC compiles the axis choice into
 /// branches, and that is the fast form: the crossing order of a ray is nearly periodic, so the
 /// branches predict well and speculation breaks the step-to-step dependency; forcing it
-/// branchless with SSE masks measured 2x slower (docs/performance.md).
+/// branchless with SSE masks measured 1.6-1.9x slower (docs/performance.md).
 template <class T>
 struct JacobsTraversal {
   const T* data = nullptr;

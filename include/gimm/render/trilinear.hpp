@@ -153,6 +153,10 @@ double trilinear_integral(const Volume<T>& volume, const IndexRay& ray, double s
                           double s_min = 0.0, const EmptyBlocks* empty = nullptr) {
   GIMM_CHECK(std::isfinite(step_mm) && step_mm > 0,
              "trilinear_integral: step must be > 0 mm, got " << step_mm);
+  GIMM_CHECK(
+      empty == nullptr || !empty->built() || empty->fits(volume.nx(), volume.ny(), volume.nz()),
+      "trilinear_integral: the empty-block grid was built for another volume than "
+          << volume.nx() << "x" << volume.ny() << "x" << volume.nz());
   double s0, s1;
   const int nx = volume.nx(), ny = volume.ny(), nz = volume.nz();
   if (!clip_to_box(ray, glm::dvec3(-1.0), glm::dvec3(nx, ny, nz), s_min, s0, s1)) return 0.0;
