@@ -92,6 +92,83 @@ class EmptyBlocks {
   std::vector<std::uint8_t> empty_;
 };
 
+namespace detail {
+/// The parameter where `ray` enters (entering = true) or leaves block (b[0], b[1], b[2]), with
+/// every face moved 1e-6 voxel inwards: a sample strictly between the two maps, after rounding,
+/// to a cell of that block.
+inline double block_face(const IndexRay& ray, const glm::dvec3& inverse_direction, const int b[3],
+                         bool entering) {
+  constexpr int B = EmptyBlocks::kSize;
+  double t =
+      entering ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    const double d = ray.direction[a];
+    if (d == 0.0) continue;
+    const bool low_face = (d > 0) == entering;
+    const double face = low_face ? b[a] * B + 1e-6 : (b[a] + 1) * B - 1e-6;
+    const double ta = (face - ray.origin[a]) * inverse_direction[a];
+    t = entering ? std::max(t, ta) : std::min(t, ta);
+  }
+  return t;
+}
+}  // namespace detail
+
+/// Calls take(k0, k1) for the runs [k0, k1) of the samples k in [k_begin, k_end), at
+/// s_k = s0 + (k + 0.5) step, that are not in empty blocks, in order. Every sample must lie in
+/// the interior (its base cell inside the grid). A 3D DDA visits the blocks along the ray at a
+/// few cycles each; sample indices are only computed where the ray enters or leaves a run of
+/// empty blocks.
+template <class Take>
+void for_each_occupied_run(const EmptyBlocks& empty, const IndexRay& ray, double s0, double step,
+                           std::int64_t k_begin, std::int64_t k_end, Take&& take) {
+  if (k_begin >= k_end) return;
+  auto s_of = [&](std::int64_t k) { return s0 + (double(k) + 0.5) * step; };
+  // The first sample at or after parameter t, within [lo, k_end].
+  auto first_at = [&](double t, std::int64_t lo) {
+    const double k = std::ceil((t - s0) / step - 0.5);
+    return k >= double(k_end) ? k_end : std::max(lo, static_cast<std::int64_t>(k));
+  };
+  const glm::dvec3 inverse_direction = 1.0 / ray.direction;
+  const double s_first = s_of(k_begin), s_last = s_of(k_end - 1);
+  int b[3], b_step[3];
+  double t_next[3], t_delta[3];
+  for (int a = 0; a < 3; ++a) {
+    const double d = ray.direction[a];
+    const int cell = static_cast<int>(ray.origin[a] + s_first * d);
+    b[a] = cell >> EmptyBlocks::kShift;
+    b_step[a] = d > 0 ? 1 : -1;
+    t_delta[a] = d == 0 ? 0.0 : std::abs(EmptyBlocks::kSize * inverse_direction[a]);
+    t_next[a] = d == 0 ? std::numeric_limits<double>::infinity()
+                       : ((d > 0 ? b[a] + 1 : b[a]) * EmptyBlocks::kSize - ray.origin[a]) *
+                             inverse_direction[a];
+  }
+  std::int64_t run_begin = k_begin, skip_from = k_begin;
+  bool skipping = false;
+  int last_empty[3] = {0, 0, 0};
+  while (true) {
+    if (empty.empty_block(b[0], b[1], b[2])) {
+      if (!skipping) {
+        skip_from = first_at(detail::block_face(ray, inverse_direction, b, true), run_begin);
+        take(run_begin, skip_from);
+        skipping = true;
+      }
+      std::copy(b, b + 3, last_empty);
+    } else if (skipping) {
+      run_begin = std::max(
+          skip_from,
+          first_at(detail::block_face(ray, inverse_direction, last_empty, false), skip_from));
+      skipping = false;
+    }
+    const int a = t_next[0] <= t_next[1] ? (t_next[0] <= t_next[2] ? 0 : 2)
+                                         : (t_next[1] <= t_next[2] ? 1 : 2);
+    if (t_next[a] > s_last) break;  // the remaining samples are all in this block
+    b[a] += b_step[a];
+    t_next[a] += t_delta[a];
+    if (!empty.contains_block(b[0], b[1], b[2])) break;  // round-off at the grid's edge
+  }
+  if (!skipping) take(run_begin, k_end);
+}
+
 /// Calls take(s0, s1) for the parameter intervals of [s_begin, s_end] (both finite) where `ray`
 /// (index space: voxel i centred on i) is not inside an empty block, in order, merging
 /// neighbouring occupied blocks. Points before the first block or past the last (the outer half
@@ -137,33 +214,6 @@ void for_each_occupied_interval(const EmptyBlocks& empty, const IndexRay& ray, d
                     : std::numeric_limits<double>::infinity();
   }
   if (occupied) take(run_begin, s_end);
-}
-
-/// Calls take(k0, k1) for the runs [k0, k1) of the samples k in [k_begin, k_end), at
-/// s_k = s0 + (k + 0.5) step, that are not in empty blocks, in order (every sample in the
-/// interior: its base cell inside the grid). The occupied intervals of
-/// for_each_occupied_interval, widened by 1e-6 voxel so that round-off cannot drop a sample of
-/// an occupied block (a sample taken from an empty block is exactly 0); sample indices are only
-/// computed where the ray enters or leaves a run of occupied blocks.
-template <class Take>
-void for_each_occupied_run(const EmptyBlocks& empty, const IndexRay& ray, double s0, double step,
-                           std::int64_t k_begin, std::int64_t k_end, Take&& take) {
-  if (k_begin >= k_end) return;
-  const double d_max =
-      std::max({std::abs(ray.direction.x), std::abs(ray.direction.y), std::abs(ray.direction.z)});
-  const double margin = 1e-6 / d_max;  // parameter over which no coordinate moves 1e-6 voxel
-  auto s_of = [&](std::int64_t k) { return s0 + (double(k) + 0.5) * step; };
-  std::int64_t next = k_begin;  // runs never overlap
-  for_each_occupied_interval(
-      empty, ray, s_of(k_begin) - margin, s_of(k_end - 1) + margin, [&](double t0, double t1) {
-        const double first = std::ceil((t0 - margin - s0) / step - 0.5);
-        const double last = std::floor((t1 + margin - s0) / step - 0.5);
-        const std::int64_t k0 = std::max(next, static_cast<std::int64_t>(std::max(first, 0.0)));
-        const std::int64_t k1 =
-            std::min(k_end, static_cast<std::int64_t>(std::max(last + 1.0, 0.0)));
-        if (k0 < k1) take(k0, k1);
-        next = std::max(next, k1);
-      });
 }
 
 }  // namespace gimm
