@@ -164,6 +164,26 @@ status = {p["id"]: p for p in m["patients"]}
 check(status.get("1", {}).get("status") == "ok", f"patient 1: {status.get('1')}")
 check("missing" in status.get("2", {}).get("error", ""), f"patient 2: {status.get('2')}")
 check("disagree" in status.get("3", {}).get("error", ""), f"patient 3: {status.get('3')}")
+# A write that fails in the middle of a patient (views are written on a helper thread while the
+# next one renders): that patient is recorded with an error naming the file, the others are
+# made, nothing half-written is left, and a rerun once the obstacle is gone equals a full run.
+out = os.path.join(TMP, "blocked_write")
+blocker = os.path.join(out, "patients", "phantom-0002", "views", "LCA_03.mask.png")
+os.makedirs(os.path.join(blocker, "in-the-way"))
+run(COMMON + ["--out", out])
+m = json.load(open(os.path.join(out, "manifest.json")))
+status = {p["id"]: p for p in m["patients"]}
+check(status.get("phantom-0002", {}).get("status") == "failed" and
+      "LCA_03.mask.png" in status["phantom-0002"].get("error", ""),
+      f"blocked patient: {status.get('phantom-0002')}")
+check(all(status.get(f"phantom-{n:04d}", {}).get("status") == "ok" for n in (0, 1, 3)),
+      f"the other patients go on: {status}")
+leftovers = [f for f in tree_files(out) if ".tmp." in f]
+check(not leftovers, f"half-written files left behind: {leftovers}")
+shutil.rmtree(blocker)
+run(COMMON + ["--out", out])
+same_tree(full, out, "rerun after a blocked write")
+
 ro = os.path.join(TMP, "read_only")
 os.makedirs(ro)
 os.chmod(ro, 0o500)

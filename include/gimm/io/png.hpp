@@ -6,6 +6,7 @@
 /// is carried out and thrown as gimm::FormatError/IoError naming the file. Written files carry
 /// no timestamp, so equal images give equal bytes.
 #include <png.h>
+#include <zlib.h>
 
 #include <csetjmp>
 #include <cstdint>
@@ -65,9 +66,13 @@ inline bool png_encode(PngIo& io, png_bytep* rows, int height, int width, int bi
     return false;
   }
   png_set_write_fn(png, &io, png_on_write, png_on_flush);
-  // zlib level 1, as for NIfTI: a 512^2 16-bit angiogram encodes several times faster than at
-  // libpng's default (6) for files a few percent larger; the write is on every render's path.
+  // The write is on every render's path, so: the Up filter on every row and zlib's run-length
+  // strategy at level 1. Measured on a 512 x 320 16-bit DRR and its 8-bit vessel mask
+  // (docs/performance.md): 2.5 ms and 0.2 ms against 7.5 and 0.8 ms with libpng's adaptive
+  // filters at level 1, and the files come out smaller (232 KB against 238 KB, 1.8 against 3.0 KB).
   png_set_compression_level(png, 1);
+  png_set_compression_strategy(png, Z_RLE);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height),
                bit_depth, color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);

@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -275,6 +276,13 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     std::vector<Camerad> cameras;
     std::vector<std::vector<ProjectedPoint>> projected;
     std::vector<std::string> names;
+    // A view's outputs (exp and 16-bit PNG, labels, mask PNG, JSON: serial work) are written on
+    // a helper thread while the next view renders on every core; one view in flight at a time.
+    // Declared after everything the task reads, so an exception here waits for it first.
+    std::future<std::vector<ProjectedPoint>> in_flight;
+    const auto collect = [&] {
+      if (in_flight.valid()) projected.push_back(in_flight.get());
+    };
     for (std::size_t v = 0; v < plan.views.size(); ++v) {
       CArm carm = o.carm;
       carm.primary_deg = plan.views[v].primary_deg;
@@ -298,24 +306,32 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       } else {
         vessel = project_unit_mask(vessel_box, camera, 1e-6, &vessel_blocks);
       }
-      write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
-      projected.push_back(label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr));
-      if (mesh_mode)
-        for (std::size_t n = 0; n < points.size(); ++n)
-          if (projected.back()[n].in_image)
-            projected.back()[n].visible = mesh_projector->unoccluded(camera, points[n].world);
-      for (auto& px : vessel.storage()) px = px ? 255 : 0;
-      write_png(dir / "views" / (name + ".mask.png"), vessel);
       nlohmann::json cj = to_json(carm);
       cj["view_class"] = plan.views[v].view_class;
       cj["view_name"] = view_class(plan.views[v].view_class).name;
       cj["system"] = to_string(system);
-      write_json_file(dir / "views" / (name + ".camera.json"), cj);
-      write_json_file(dir / "views" / (name + ".points.json"),
-                      detail::view_points_json(points, projected.back()), -1);
+      collect();
+      in_flight =
+          std::async(std::launch::async, [&, integrals = std::move(integrals),
+                                          vessel = std::move(vessel), overlap = std::move(overlap),
+                                          cj = std::move(cj), camera, name]() mutable {
+            write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
+            auto view = label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr);
+            if (mesh_mode)
+              for (std::size_t n = 0; n < points.size(); ++n)
+                if (view[n].in_image)
+                  view[n].visible = mesh_projector->unoccluded(camera, points[n].world);
+            for (auto& px : vessel.storage()) px = px ? 255 : 0;
+            write_png(dir / "views" / (name + ".mask.png"), vessel);
+            write_json_file(dir / "views" / (name + ".camera.json"), cj);
+            write_json_file(dir / "views" / (name + ".points.json"),
+                            detail::view_points_json(points, view), -1);
+            return view;
+          });
       cameras.push_back(camera);
       names.push_back(name);
     }
+    collect();
     std::size_t dense_total = 0;
     for (const auto& pr : plan.pairs) {
       const PairLabels labels = label_pair(points, projected[pr.a], projected[pr.b], cameras[pr.a],
