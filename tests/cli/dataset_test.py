@@ -46,6 +46,34 @@ def same_tree(a, b, what):
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
+def check_pair_labels(pdir, what):
+    """Every dense label of a patient reprojects with its cameras and satisfies the exact F."""
+    pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
+    check(len(pairs) == 27, f"{what}: 27 pairs per patient in shared mode, got {len(pairs)}")
+    check(len(os.listdir(os.path.join(pdir, "views"))) == 44,
+          f"{what}: 11 views x (png, mask, camera, points)")
+    worst_px = worst_epi = 0.0
+    for name in pairs:
+        lab = json.load(open(os.path.join(pdir, "pairs", name)))
+        Pa = np.array(json.load(open(os.path.join(pdir, "views", lab["view_a"] + ".camera.json")))["P"])
+        Pb = np.array(json.load(open(os.path.join(pdir, "views", lab["view_b"] + ".camera.json")))["P"])
+        F = np.array(lab["F"])
+        d = np.array(lab["dense"])
+        check(len(d) > 50, f"{what} {name}: only {len(d)} dense labels")
+        check(len(lab["sparse"]) == 20, f"{what} {name}: {len(lab['sparse'])} sparse labels")
+        X = np.c_[d[:, 4:7], np.ones(len(d))]
+        for P, uv in [(Pa, d[:, 0:2]), (Pb, d[:, 2:4])]:
+            x = X @ P.T
+            worst_px = max(worst_px, np.abs(x[:, :2] / x[:, 2:] - uv).max())
+        xa, xb = np.c_[d[:, 0:2], np.ones(len(d))], np.c_[d[:, 2:4], np.ones(len(d))]
+        lines = xa @ F.T
+        dist = np.abs((xb * lines).sum(1)) / np.hypot(lines[:, 0], lines[:, 1])
+        worst_epi = max(worst_epi, dist.max())
+    check(worst_px < 1e-3, f"{what}: labels reproject to {worst_px} px")
+    check(worst_epi < 1e-6, f"{what}: labels lie {worst_epi} px off their epipolar lines")
+    return pairs
+
+
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
 full = os.path.join(TMP, "full")
@@ -56,27 +84,7 @@ manifest = json.load(open(os.path.join(full, "manifest.json")))
 check(len(manifest["patients"]) == 4 and all(p["status"] == "ok" for p in manifest["patients"]),
       "four ok patients")
 pdir = os.path.join(full, "patients", "phantom-0001")
-pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
-check(len(pairs) == 27, f"27 pairs per patient in shared mode, got {len(pairs)}")
-check(len(os.listdir(os.path.join(pdir, "views"))) == 44, "11 views x (png, mask, camera, points)")
-worst_px = worst_epi = 0.0
-for name in pairs:
-    lab = json.load(open(os.path.join(pdir, "pairs", name)))
-    Pa = np.array(json.load(open(os.path.join(pdir, "views", lab["view_a"] + ".camera.json")))["P"])
-    Pb = np.array(json.load(open(os.path.join(pdir, "views", lab["view_b"] + ".camera.json")))["P"])
-    F = np.array(lab["F"])
-    d = np.array(lab["dense"])
-    check(len(d) > 50, f"{name}: only {len(d)} dense labels")
-    check(len(lab["sparse"]) == 20, f"{name}: {len(lab['sparse'])} sparse labels")
-    X = np.c_[d[:, 4:7], np.ones(len(d))]
-    for P, uv in [(Pa, d[:, 0:2]), (Pb, d[:, 2:4])]:
-        x = X @ P.T
-        worst_px = max(worst_px, np.abs(x[:, :2] / x[:, 2:] - uv).max())
-    xa, xb = np.c_[d[:, 0:2], np.ones(len(d))], np.c_[d[:, 2:4], np.ones(len(d))]
-    lines = xa @ F.T
-    dist = np.abs((xb * lines).sum(1)) / np.hypot(lines[:, 0], lines[:, 1])
-    worst_epi = max(worst_epi, dist.max())
-check(worst_px < 1e-3, f"labels reproject to {worst_px} px")
+pairs = check_pair_labels(pdir, "voxel vessels")
 # Per-view points: the branch/point indices address centerlines.json, and the pair labels are
 # exactly the points valid (in image, on mask) in both views.
 tree = json.load(open(os.path.join(pdir, "centerlines.json")))
@@ -90,7 +98,24 @@ for row, n in zip(lab["dense"][:50], valid[:50]):
     xyz = tree["branches"][va["branch"][n]]["points"][va["point"][n]]
     check(np.allclose(row[4:7], xyz) and row[7] == va["branch"][n] and
           abs(row[0] - va["u"][n]) < 1e-9, f"label {row[:9]} vs centerline point {xyz}")
-check(worst_epi < 1e-6, f"labels lie {worst_epi} px off their epipolar lines")
+
+# Mesh vessels (Embree chords and visibility, traced on the writer thread too): labels hold, the
+# bytes do not depend on the thread count, and occluded points are marked.
+MESH = ["--phantom", "2", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
+        "--quiet", "--vessels", "mesh"]
+mesh_out = os.path.join(TMP, "mesh")
+run(MESH + ["--out", mesh_out])
+check_pair_labels(os.path.join(mesh_out, "patients", "phantom-0001"), "mesh vessels")
+hidden = 0
+for root, _, files in os.walk(os.path.join(mesh_out, "patients")):
+    for f in files:
+        if f.endswith(".points.json"):
+            pts = json.load(open(os.path.join(root, f)))
+            hidden += sum(1 for i, vis in zip(pts["in_image"], pts["visible"]) if i and not vis)
+check(hidden > 0, "mesh mode marks some in-image points as occluded")
+mesh_one = os.path.join(TMP, "mesh_one_thread")
+run(MESH + ["--out", mesh_one], env={"OMP_NUM_THREADS": "1"})
+same_tree(mesh_out, mesh_one, "mesh vessels on 1 thread against 2")
 
 # Split by patient: each patient in exactly one split file.
 seen = []
