@@ -85,14 +85,46 @@ void write_splits(const fs::path& out, const nlohmann::json& patients) {
   }
 }
 
-/// A killed run can leave "<file>.tmp.<pid>" behind (write_file_atomic's temporaries);
+/// A killed run can leave "<file>.tmp.<host>.<pid>" behind (write_file_atomic's temporaries);
 /// they are never read, and removing them makes a resumed tree equal to an uninterrupted one.
-void remove_stale_temporaries(const fs::path& out) {
+/// Only under `dir` and only files this process would write: other shards may be writing theirs
+/// into the same output folder right now.
+void remove_stale_temporaries(const fs::path& dir, const std::string& name_prefix = "") {
+  if (!fs::is_directory(dir)) return;
   std::vector<fs::path> stale;
-  for (const auto& e : fs::recursive_directory_iterator(out))
-    if (e.is_regular_file() && e.path().filename().string().find(".tmp.") != std::string::npos)
-      stale.push_back(e.path());
+  const auto is_stale = [&](const fs::path& p) {
+    const std::string name = p.filename().string();
+    return name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
+  };
+  if (name_prefix.empty()) {
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+      if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
+  } else {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
+  }
   for (const auto& p : stale) fs::remove(p);
+}
+
+/// The outputs written once per run (not per patient): the manifest, and when not sharded the
+/// splits and the reference export.
+void remove_stale_run_temporaries(const fs::path& out, const std::string& manifest_name,
+                                  bool sharded) {
+  remove_stale_temporaries(out, manifest_name + ".tmp.");
+  if (sharded) return;
+  remove_stale_temporaries(out / "splits");
+  remove_stale_temporaries(out / "reference");
+}
+
+/// The first difference between two JSON values, as "path: stored vs wanted".
+std::string first_difference(const nlohmann::json& stored, const nlohmann::json& wanted) {
+  const nlohmann::json patch = nlohmann::json::diff(stored, wanted);
+  if (patch.empty()) return "";
+  const std::string path = patch[0].at("path").get<std::string>();
+  const nlohmann::json::json_pointer pointer(path);
+  const std::string was = stored.contains(pointer) ? stored.at(pointer).dump() : "(none)";
+  const std::string now = wanted.contains(pointer) ? wanted.at(pointer).dump() : "(none)";
+  return path + ": " + was + " there, " + now + " here";
 }
 
 /// --export reference: the released dataset's layout in OUT/reference.
@@ -103,6 +135,8 @@ void export_if_asked(const std::string& format, const fs::path& out) {
 }
 
 int merge(const fs::path& out) {
+  GIMM_CHECK(fs::is_directory(out), "merge: '" << out.string() << "' is not a directory");
+  remove_stale_run_temporaries(out, "manifest.json", false);
   std::vector<fs::path> shards;
   for (const auto& e : fs::directory_iterator(out)) {
     const std::string name = e.path().filename().string();
@@ -201,6 +235,9 @@ int main(int argc, char** argv) {
     options.projector = gimm::parse_projector(projector);
     options.vessel_mode = gimm::parse_vessel_mode(vessel_mode);
     const Shard shard = resolve_shard(shard_flag);
+    GIMM_CHECK(!shard.sharded() || export_format.empty(),
+               "--export with --shard " << shard.index << "/" << shard.count
+                                        << ": export after `gimm-dataset merge --export`");
     std::vector<gimm::PatientSource> sources;
     if (!input.empty()) {
       sources = gimm::scan_imagecas_folder(input);
@@ -215,16 +252,31 @@ int main(int argc, char** argv) {
         sources.push_back(s);
       }
     }
+    gimm::assign_splits(sources, options);
     fs::create_directories(out);
-    remove_stale_temporaries(out);
     {  // fail early, before any work, if the output is not writable
-      const fs::path probe = fs::path(out) / (".write-test." + std::to_string(::getpid()));
+      const fs::path probe = fs::path(out) / (".write-test." + gimm::detail::process_tag());
       gimm::write_file_atomic(probe, std::string("ok"));
       fs::remove(probe);
     }
     std::vector<const gimm::PatientSource*> mine;
     for (std::size_t k = 0; k < sources.size(); ++k)
       if (static_cast<int>(k % shard.count) == shard.index) mine.push_back(&sources[k]);
+    // Resuming: finished patients must have been made with these parameters (else the manifest
+    // would describe files it did not make); unfinished ones lose their temporaries.
+    remove_stale_run_temporaries(out, shard.manifest_name(), shard.sharded());
+    for (const auto* src : mine) {
+      const fs::path dir = fs::path(out) / "patients" / src->id;
+      remove_stale_temporaries(dir);
+      if (!fs::exists(dir / "done.json")) continue;
+      const nlohmann::json stored =
+          gimm::read_json_file(dir / "done.json").value("run", nlohmann::json());
+      const std::string difference = first_difference(stored, gimm::patient_run(*src, options));
+      GIMM_CHECK(difference.empty(), "gimm-dataset: '"
+                                         << dir.string() << "' was made with other parameters ("
+                                         << difference << "); use another --out, or the parameters "
+                                         << "it was made with");
+    }
 
     nlohmann::json patients = nlohmann::json::array();
     const auto t0 = std::chrono::steady_clock::now();
@@ -234,6 +286,7 @@ int main(int argc, char** argv) {
       nlohmann::json record;
       if (fs::exists(done_file)) {
         record = gimm::read_json_file(done_file);
+        record.erase("run");
         ++resumed;
       } else {
         try {
@@ -249,14 +302,17 @@ int main(int argc, char** argv) {
       patients.push_back(record);
       ++done;
       if (!quiet) {
+        // The rate counts the patients made in this run, not the ones found finished.
         const double s =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const double rate = done / std::max(s, 1e-9);
+        const std::size_t made = done - resumed;
+        const double rate = made / std::max(s, 1e-9);
+        std::string eta = "?";
+        if (made > 0) eta = std::to_string(std::llround((mine.size() - done) / rate)) + " s";
         std::fprintf(stderr,
-                     "\rgimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.2f patients/s, "
-                     "ETA %.0f s   ",
-                     done, mine.size(), resumed, failed, rate,
-                     (mine.size() - done) / std::max(rate, 1e-9));
+                     "\rgimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, "
+                     "ETA %s   ",
+                     done, mine.size(), resumed, failed, rate, eta.c_str());
       }
     }
     if (!quiet) std::fprintf(stderr, "\n");
@@ -269,8 +325,6 @@ int main(int argc, char** argv) {
         {"patients", patients}};
     if (shard.sharded()) {
       manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
-      GIMM_CHECK(export_format.empty(),
-                 "--export with --shard: export after `gimm-dataset merge --export`");
     } else {
       write_splits(out, patients);
     }

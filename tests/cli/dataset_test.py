@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from harness import Harness
+from harness import Harness, read_png_gray
 
 BIN, TMP = sys.argv[1], sys.argv[2]
 DATASET = os.path.join(BIN, "gimm-dataset")
@@ -46,12 +46,12 @@ def same_tree(a, b, what):
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
-def check_pair_labels(pdir, what):
+def check_pair_labels(pdir, what, files_per_view=4):
     """Every dense label of a patient reprojects with its cameras and satisfies the exact F."""
     pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
     check(len(pairs) == 27, f"{what}: 27 pairs per patient in shared mode, got {len(pairs)}")
-    check(len(os.listdir(os.path.join(pdir, "views"))) == 44,
-          f"{what}: 11 views x (png, mask, camera, points)")
+    check(len(os.listdir(os.path.join(pdir, "views"))) == 11 * files_per_view,
+          f"{what}: 11 views x {files_per_view} files (png, mask, camera, points[, overlap])")
     worst_px = worst_epi = 0.0
     for name in pairs:
         lab = json.load(open(os.path.join(pdir, "pairs", name)))
@@ -105,14 +105,21 @@ MESH = ["--phantom", "2", "--seed", "7", "--rows", "128", "--cols", "128", "--pi
         "--quiet", "--vessels", "mesh"]
 mesh_out = os.path.join(TMP, "mesh")
 run(MESH + ["--out", mesh_out])
-check_pair_labels(os.path.join(mesh_out, "patients", "phantom-0001"), "mesh vessels")
-hidden = 0
+check_pair_labels(os.path.join(mesh_out, "patients", "phantom-0001"), "mesh vessels", 5)
+hidden = overlapping = 0
 for root, _, files in os.walk(os.path.join(mesh_out, "patients")):
     for f in files:
         if f.endswith(".points.json"):
             pts = json.load(open(os.path.join(root, f)))
             hidden += sum(1 for i, vis in zip(pts["in_image"], pts["visible"]) if i and not vis)
-check(hidden > 0, "mesh mode marks some in-image points as occluded")
+            overlapping += sum(1 for i, o in zip(pts["in_image"], pts["overlap"]) if i and o >= 2)
+check(hidden > 0 and overlapping > 0, "mesh mode marks some in-image points occluded/overlapping")
+# The overlap map: passages per pixel, > 0 exactly on the vessel mask.
+view = os.path.join(mesh_out, "patients", "phantom-0001", "views", "LCA_00")
+overlap_map, mask = read_png_gray(view + ".overlap.png"), read_png_gray(view + ".mask.png")
+check(overlap_map.shape == (128, 128) and ((overlap_map > 0) == (mask > 0)).all() and
+      overlap_map.max() >= 2, f"overlap map: max {overlap_map.max()}, on mask exactly")
+
 mesh_one = os.path.join(TMP, "mesh_one_thread")
 run(MESH + ["--out", mesh_one], env={"OMP_NUM_THREADS": "1"})
 same_tree(mesh_out, mesh_one, "mesh vessels on 1 thread against 2")
@@ -123,15 +130,30 @@ for s in ["train", "val", "test"]:
     seen += open(os.path.join(full, "splits", s + ".txt")).read().split()
 check(sorted(seen) == [f"phantom-{n:04d}" for n in range(4)], f"splits {seen}")
 
-# Killed and resumed (SIGKILL at several moments) equals uninterrupted.
-for delay in [0.25, 0.6, 1.0]:
-    out = os.path.join(TMP, f"killed_{delay}")
+# Killed and resumed (SIGKILL at several moments) equals uninterrupted. The moments are events,
+# not times, so that each kill lands while the run is still going on this machine's speed.
+def views_written(out, patient):
+    d = os.path.join(out, "patients", patient, "views")
+    return len(os.listdir(d)) if os.path.isdir(d) else 0
+
+
+kill_moments = {
+    "at start": lambda out: True,
+    "mid first patient": lambda out: views_written(out, "phantom-0000") >= 6,
+    "after first patient": lambda out: os.path.exists(
+        os.path.join(out, "patients", "phantom-0000", "done.json")),
+    "mid third patient": lambda out: views_written(out, "phantom-0002") >= 10,
+}
+for moment, reached in kill_moments.items():
+    out = os.path.join(TMP, "killed_" + moment.replace(" ", "_"))
     proc = subprocess.Popen([DATASET, *COMMON, "--out", out])
-    time.sleep(delay)
+    while not reached(out) and proc.poll() is None:
+        time.sleep(0.002)
+    check(proc.poll() is None, f"kill {moment}: the run ended before the kill")
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     run(COMMON + ["--out", out])
-    same_tree(full, out, f"resume after kill at {delay} s")
+    same_tree(full, out, f"resume after a kill {moment}")
 
 # Shards (flag, Slurm and Kubernetes variables) merged equal one run.
 for how in ["flag", "slurm", "k8s"]:
@@ -162,6 +184,44 @@ run(["merge", "--out", exp_sh, "--export", "reference"])
 same_tree(os.path.join(exp, "reference"), os.path.join(exp_sh, "reference"),
           "reference export after merge")
 
+# A shard cleans only its own patients' temporaries: another shard may be writing its files
+# into the same folder right now.
+out = os.path.join(TMP, "shards_busy")
+busy = os.path.join(out, "patients", "phantom-0001", "views", "LCA_00.png.tmp.otherhost.77")
+os.makedirs(os.path.dirname(busy))
+open(busy, "w").write("being written by shard 1")
+run(COMMON + ["--out", out, "--shard", "0/2"])
+check(os.path.exists(busy), "shard 0 removed a temporary file of shard 1's patient")
+run(COMMON + ["--out", out, "--shard", "1/2"])
+check(not os.path.exists(busy), "shard 1 left its own stale temporary behind")
+run(["merge", "--out", out])
+same_tree(full, out, "2 shards with a stale temporary, merged")
+
+# Resuming into a folder made with other parameters is refused and changes nothing.
+out = os.path.join(TMP, "other_parameters")
+shutil.copytree(full, out)
+proc = run([a if a != "128" else "96" for a in COMMON] + ["--out", out], ok=False)
+check(proc.returncode != 0 and "other parameters" in proc.stderr and "/parameters/carm/" in proc.stderr,
+      f"resume with other parameters: {proc.stderr[-300:]}")
+same_tree(full, out, "a refused resume")
+
+# --export with --shard is refused before any work.
+out = os.path.join(TMP, "shard_export")
+proc = run(COMMON + ["--out", out, "--shard", "0/2", "--export", "reference"], ok=False)
+check(proc.returncode != 0 and "--export with --shard 0/2" in proc.stderr and
+      not os.path.exists(os.path.join(out, "patients")), f"--export with --shard: {proc.stderr}")
+
+# The progress line: patients done, rate and ETA; after a full resume the rate counts no one.
+LOUD = [a for a in COMMON if a != "--quiet"]
+proc = run(LOUD[:1] + ["1"] + LOUD[2:] + ["--out", os.path.join(TMP, "progress")])
+check("1/1 patients (0 resumed, 0 failed)" in proc.stderr and "patients/s, ETA 0 s" in proc.stderr,
+      f"progress line: {proc.stderr!r}")
+out = os.path.join(TMP, "progress_resumed")
+shutil.copytree(full, out)
+proc = run(LOUD + ["--out", out])
+check("4/4 patients (4 resumed, 0 failed), 0.000 patients/s, ETA ?" in proc.stderr,
+      f"progress line after a resume: {proc.stderr!r}")
+
 out = os.path.join(TMP, "shards_missing")
 run(COMMON + ["--out", out, "--shard", "0/2"])
 proc = run(["merge", "--out", out], ok=False)
@@ -182,13 +242,33 @@ small = nib.load(os.path.join(TMP, "x", "3.label.nii.gz"))
 nib.save(nib.Nifti1Image(np.asarray(small.dataobj)[:64], small.affine),
          os.path.join(folder, "3.label.nii.gz"))
 shutil.copy(os.path.join(TMP, "x", "3.img.nii.gz"), os.path.join(folder, "3.img.nii.gz"))
+# Patient 5: a NaN in the CT; patient 6: a label without any vessel.
+img = nib.load(os.path.join(folder, "1.img.nii.gz"))
+hu = np.asarray(img.dataobj).astype(np.float32)
+hu[10, 20, 5] = np.nan
+nib.save(nib.Nifti1Image(hu, img.affine), os.path.join(folder, "5.img.nii.gz"))
+shutil.copy(os.path.join(folder, "1.label.nii.gz"), os.path.join(folder, "5.label.nii.gz"))
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "6.img.nii.gz"))
+lab1 = nib.load(os.path.join(folder, "1.label.nii.gz"))
+nib.save(nib.Nifti1Image(np.zeros(lab1.shape, np.uint8), lab1.affine),
+         os.path.join(folder, "6.label.nii.gz"))
+# Patient 4: the label's j axis points the other way (same origin, sizes and spacing).
+lab4 = nib.load(os.path.join(folder, "1.label.nii.gz"))
+flipped = lab4.affine.copy()
+flipped[:3, 1] *= -1
+nib.save(nib.Nifti1Image(np.asarray(lab4.dataobj), flipped), os.path.join(folder, "4.label.nii.gz"))
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "4.img.nii.gz"))
 out = os.path.join(TMP, "folder_out")
 run(["--input", folder, "--out", out, "--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet"])
 m = json.load(open(os.path.join(out, "manifest.json")))
 status = {p["id"]: p for p in m["patients"]}
 check(status.get("1", {}).get("status") == "ok", f"patient 1: {status.get('1')}")
 check("missing" in status.get("2", {}).get("error", ""), f"patient 2: {status.get('2')}")
-check("disagree" in status.get("3", {}).get("error", ""), f"patient 3: {status.get('3')}")
+check("dimensions" in status.get("3", {}).get("error", ""), f"patient 3: {status.get('3')}")
+check("direction of axis 1" in status.get("4", {}).get("error", ""), f"patient 4: {status.get('4')}")
+check("not finite" in status.get("5", {}).get("error", ""), f"patient 5: {status.get('5')}")
+check("patient 6 label: empty coronary mask" in status.get("6", {}).get("error", ""),
+      f"patient 6: {status.get('6')}")
 # A write that fails in the middle of a patient (views are written on a helper thread while the
 # next one renders): that patient is recorded with an error naming the file, the others are
 # made, nothing half-written is left, and a rerun once the obstacle is gone equals a full run.

@@ -183,3 +183,27 @@ TEST_CASE("Volume geometry validation names the bad field", "[core][volume]") {
   bad.direction *= 2;
   CHECK_THROWS_AS(Volume<float>(bad), Error);
 }
+
+TEST_CASE("grid_difference names the first property two grids disagree on", "[core][volume]") {
+  VolumeGeometry a;
+  a.dims = {4, 5, 6};
+  a.spacing = {0.4, 0.4, 0.5};
+  a.origin = {10, -20, 30};
+  CHECK(grid_difference(a, a).empty());
+  VolumeGeometry b = a;
+  b.spacing[2] += 0.5e-4;  // within tolerance
+  b.origin[0] += 0.5e-3;
+  CHECK(grid_difference(a, b).empty());
+  b = a;
+  b.dims[2] = 7;
+  CHECK_THAT(grid_difference(a, b), Catch::Contains("dimensions 4x5x6 vs 4x5x7"));
+  b = a;
+  b.spacing[1] = 0.41;
+  CHECK_THAT(grid_difference(a, b), Catch::Contains("spacing"));
+  b = a;
+  b.origin[2] = 31;
+  CHECK_THAT(grid_difference(a, b), Catch::Contains("origin"));
+  b = a;
+  b.direction.col(1) *= -1;  // a flipped j axis, same origin
+  CHECK_THAT(grid_difference(a, b), Catch::Contains("direction of axis 1"));
+}

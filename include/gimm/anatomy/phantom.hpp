@@ -45,6 +45,9 @@ inline PhantomSize parse_phantom_size(const std::string& s) {
   if (s == "imagecas") return PhantomSize::imagecas;
   GIMM_FAIL("phantom size must be small|imagecas, got '" << s << "'");
 }
+inline const char* to_string(PhantomSize s) {
+  return s == PhantomSize::imagecas ? "imagecas" : "small";
+}
 inline Dominance parse_dominance(const std::string& s) {
   if (s == "auto") return Dominance::automatic;
   if (s == "right") return Dominance::right;

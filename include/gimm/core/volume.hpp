@@ -14,6 +14,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -61,6 +63,39 @@ struct VolumeGeometry {
                what << ": direction is not orthonormal (|D^T D - I| = " << orthonormality << ")");
   }
 };
+
+/// How grid `b` differs from grid `a` ("" when they describe the same voxels): dimensions,
+/// then spacing (1e-4 mm), origin (1e-3 mm) and axis directions (1e-4), as "what: a vs b".
+inline std::string grid_difference(const VolumeGeometry& a, const VolumeGeometry& b) {
+  std::ostringstream out;
+  const auto vec = [&](const Eigen::Vector3d& v) {
+    out << "(" << v[0] << ", " << v[1] << ", " << v[2] << ")";
+  };
+  if (a.dims != b.dims) {
+    out << "dimensions " << a.dims[0] << "x" << a.dims[1] << "x" << a.dims[2] << " vs " << b.dims[0]
+        << "x" << b.dims[1] << "x" << b.dims[2];
+  } else if ((a.spacing - b.spacing).cwiseAbs().maxCoeff() > 1e-4) {
+    out << "spacing ";
+    vec(a.spacing);
+    out << " vs ";
+    vec(b.spacing);
+  } else if ((a.origin - b.origin).cwiseAbs().maxCoeff() > 1e-3) {
+    out << "origin ";
+    vec(a.origin);
+    out << " vs ";
+    vec(b.origin);
+  } else {
+    for (int axis = 0; axis < 3; ++axis)
+      if ((a.direction.col(axis) - b.direction.col(axis)).cwiseAbs().maxCoeff() > 1e-4) {
+        out << "direction of axis " << axis << " ";
+        vec(a.direction.col(axis));
+        out << " vs ";
+        vec(b.direction.col(axis));
+        break;
+      }
+  }
+  return out.str();
+}
 
 template <class T>
 class Volume {

@@ -1,9 +1,11 @@
 #pragma once
 /// Whole-file reads and atomic writes.
 ///
-/// write_file_atomic writes to "<path>.tmp.<pid>" in the same directory, flushes, and renames
-/// over `path`, so a reader (or a run killed at any moment) sees either the old file or the
-/// complete new one, never a half-written file. Errors name the file and the OS reason.
+/// write_file_atomic writes to "<path>.tmp.<host>.<pid>" in the same directory, flushes, and
+/// renames over `path`, so a reader (or a run killed at any moment) sees either the old file or
+/// the complete new one, never a half-written file. The host name keeps the temporaries of
+/// processes on different machines apart (every Kubernetes pod's process may be PID 1). Errors
+/// name the file and the OS reason.
 #include <unistd.h>
 #include <cerrno>
 #include <cstdio>
@@ -43,10 +45,20 @@ inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& p
   return bytes;
 }
 
+namespace detail {
+/// "<host>.<pid>": names this process's temporary files apart from any other writer's.
+inline std::string process_tag() {
+  char host[256] = {0};
+  if (::gethostname(host, sizeof host - 1) != 0 || host[0] == 0) std::strcpy(host, "host");
+  for (char* c = host; *c; ++c)
+    if (*c == '/') *c = '_';
+  return std::string(host) + "." + std::to_string(static_cast<long>(::getpid()));
+}
+}  // namespace detail
+
 inline void write_file_atomic(const std::filesystem::path& path, const void* data,
                               std::size_t size) {
-  const std::filesystem::path tmp =
-      path.string() + ".tmp." + std::to_string(static_cast<long>(::getpid()));
+  const std::filesystem::path tmp = path.string() + ".tmp." + detail::process_tag();
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     GIMM_CHECK_AS(IoError, f != nullptr,

@@ -6,6 +6,7 @@
 ///   patients/<id>/centerlines.json            centerlines extracted from the label
 ///   patients/<id>/views/<SYS>_<nn>.png        16-bit angiogram (Beer-Lambert, min-max)
 ///   patients/<id>/views/<SYS>_<nn>.mask.png   8-bit projected vessel mask (0/255)
+///   patients/<id>/views/<SYS>_<nn>.overlap.png 8-bit vessel passages per pixel (mesh mode)
 ///   patients/<id>/views/<SYS>_<nn>.camera.json camera, view class, angles
 ///   patients/<id>/pairs/<SYS>_<nn>-<mm>.json  pair labels (dense, sparse, F, view classes)
 ///   patients/<id>/done.json                   the patient's record, written last
@@ -98,6 +99,7 @@ struct PatientSource {
   std::filesystem::path image, label;  ///< files (empty for a phantom)
   std::optional<std::uint64_t> phantom_seed;
   PhantomSize phantom_size = PhantomSize::small;
+  std::string split = "train";  ///< train | val | test (assign_splits)
 };
 
 /// ImageCAS-style folder: every N.img.nii.gz with its N.label.nii.gz, sorted by id. A missing
@@ -131,12 +133,38 @@ inline std::uint64_t stable_hash(const std::string& s) {
   return h;
 }
 
-/// Patient-level split: each id goes to train/val/test by a seeded hash, so the split needs
-/// no global state and is the same however the run is sharded.
-inline std::string split_of(const std::string& id, const DatasetOptions& o) {
-  Rng rng(o.seed ^ stable_hash("split:" + id));
-  const double u = rng.uniform(0, 1);
-  return u < o.split_train ? "train" : u < o.split_train + o.split_val ? "val" : "test";
+/// Patient-level split with exact proportions: the patients are ordered by a seeded hash of
+/// their id; the first round(val n) go to val, the next round(test n) to test, the rest to train,
+/// and with three or more patients val and test get at least one each. It depends on the seed
+/// and the set of ids only, so every shard computes the same split.
+inline void assign_splits(std::vector<PatientSource>& patients, const DatasetOptions& o) {
+  const double test_fraction = 1 - o.split_train - o.split_val;
+  GIMM_CHECK(o.split_train >= 0 && o.split_val >= 0 && test_fraction >= -1e-12,
+             "split: fractions must be >= 0 and add up to at most 1, got train "
+                 << o.split_train << ", val " << o.split_val);
+  const std::size_t n = patients.size();
+  std::vector<std::pair<std::uint64_t, std::size_t>> order(n);
+  for (std::size_t k = 0; k < n; ++k)
+    order[k] = {Rng(o.seed ^ stable_hash("split:" + patients[k].id)).next_u64(), k};
+  std::sort(order.begin(), order.end());
+  const auto share = [&](double fraction) {
+    auto count = static_cast<std::size_t>(std::llround(fraction * static_cast<double>(n)));
+    return n >= 3 && fraction > 0 ? std::max<std::size_t>(count, 1) : count;
+  };
+  const std::size_t n_val = share(o.split_val), n_test = std::min(n - n_val, share(test_fraction));
+  for (std::size_t r = 0; r < n; ++r)
+    patients[order[r].second].split = r < n_val ? "val" : (r < n_val + n_test ? "test" : "train");
+}
+
+/// What a patient's files depend on: the run's parameters and the patient's own input. Kept in
+/// done.json, so that resuming into a folder made with other parameters is refused.
+inline nlohmann::json patient_run(const PatientSource& src, const DatasetOptions& o) {
+  nlohmann::json input;
+  if (src.phantom_seed)
+    input = {{"phantom_seed", *src.phantom_seed}, {"phantom_size", to_string(src.phantom_size)}};
+  else
+    input = {{"image", src.image.filename().string()}, {"label", src.label.filename().string()}};
+  return {{"parameters", o.to_json()}, {"input", input}, {"split", src.split}};
 }
 
 namespace detail {
@@ -214,11 +242,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                   "patient " << src.id << ": label '" << src.label.string() << "' is missing");
     hu = read_nifti<float>(src.image);
     label = read_nifti<std::uint8_t>(src.label);
-    GIMM_CHECK(hu.dims() == label.dims() && (hu.spacing() - label.spacing()).norm() < 1e-4 &&
-                   (hu.origin() - label.origin()).norm() < 1e-3,
-               "patient " << src.id << ": image and label grids disagree (" << hu.nx() << "x"
-                          << hu.ny() << "x" << hu.nz() << " vs " << label.nx() << "x" << label.ny()
-                          << "x" << label.nz() << ")");
+    const std::string difference = grid_difference(hu.geometry(), label.geometry());
+    GIMM_CHECK(difference.empty(),
+               "patient " << src.id << ": image and label grids disagree: " << difference);
   }
   const auto split = split_coronary_systems(label, {}, "patient " + src.id + " label");
   const fs::path dir = out / "patients" / src.id;
@@ -227,7 +253,8 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
 
   Rng rng = Rng(o.seed).fork(stable_hash(src.id));
   nlohmann::json record = {
-      {"id", src.id}, {"split", split_of(src.id, o)}, {"systems", nlohmann::json::object()}};
+      {"id", src.id}, {"split", src.split}, {"systems", nlohmann::json::object()}};
+  if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
     const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
@@ -323,6 +350,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                   view[n].visible = mesh_projector->unoccluded(camera, points[n].world);
             for (auto& px : vessel.storage()) px = px ? 255 : 0;
             write_png(dir / "views" / (name + ".mask.png"), vessel);
+            if (mesh_mode) write_png(dir / "views" / (name + ".overlap.png"), overlap);
             write_json_file(dir / "views" / (name + ".camera.json"), cj);
             write_json_file(dir / "views" / (name + ".points.json"),
                             detail::view_points_json(points, view), -1);
@@ -353,6 +381,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   record["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   nlohmann::json stored = record;
   stored.erase("seconds");  // timing varies run to run; done.json must not
+  stored["run"] = patient_run(src, o);
   write_json_file(dir / "done.json", stored);
   return record;
 }
