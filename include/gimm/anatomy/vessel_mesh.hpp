@@ -91,11 +91,85 @@ inline double gaussian_blur(std::vector<float>& g, int nx, int ny, int nz, doubl
   return kernel[radius];
 }
 
+/// The voxels a mesh of `inside` (a dense 0/1 grid, zero border) must enclose so that its
+/// surface keeps the mask's 26-connectivity and has no hollows. The tetrahedra cut each cube
+/// along one diagonal, so they join a voxel to 14 of its 26 neighbours: two mask voxels that
+/// touch only along an edge or a corner get the voxels between them (a one-voxel staircase
+/// would otherwise fall apart into beads). Background enclosed by the mask (not 6-connected to
+/// the border) is filled, or it would become a second surface inside the vessel.
+inline void close_for_meshing(std::vector<std::uint8_t>& inside, int nx, int ny, int nz) {
+  const std::int64_t sy = nx, sz = static_cast<std::int64_t>(nx) * ny;
+  const std::vector<std::uint8_t> mask = inside;
+  const auto at = [&](int i, int j, int k) { return i + sy * j + sz * k; };
+  for (int k = 1; k + 1 < nz; ++k)
+    for (int j = 1; j + 1 < ny; ++j)
+      for (int i = 1; i + 1 < nx; ++i) {
+        if (!mask[static_cast<std::size_t>(at(i, j, k))]) continue;
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int d[3] = {di, dj, dk};
+              if (std::abs(di) + std::abs(dj) + std::abs(dk) < 2) continue;
+              if (!mask[static_cast<std::size_t>(at(i + di, j + dj, k + dk))]) continue;
+              // A face path p -> ... -> q through the box they span, taking the axes in some
+              // order; if there is none, every voxel of the box joins the inside.
+              const int axes[3][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}};
+              bool path = false;
+              for (const auto& order : axes)
+                for (int flip = 0; flip < 2 && !path; ++flip) {
+                  int p[3] = {i, j, k};
+                  bool ok = true;
+                  for (int step = 0; step < 3 && ok; ++step) {
+                    const int a = order[flip ? 2 - step : step];
+                    if (d[a] == 0) continue;
+                    p[a] += d[a];
+                    ok = mask[static_cast<std::size_t>(at(p[0], p[1], p[2]))] != 0;
+                  }
+                  path = ok;
+                }
+              if (path) continue;
+              for (int c = 0; c < 8; ++c) {
+                const int q[3] = {i + ((c & 1) ? di : 0), j + ((c & 2) ? dj : 0),
+                                  k + ((c & 4) ? dk : 0)};
+                inside[static_cast<std::size_t>(at(q[0], q[1], q[2]))] = 1;
+              }
+            }
+      }
+  // Flood the background from the border (6-connected); what it does not reach is enclosed.
+  // Sweeps forward and backward until nothing changes (a vessel box is mostly background, so a
+  // few sweeps do; no queue the size of the box).
+  std::vector<std::uint8_t> outside(inside.size(), 0);
+  const auto reach = [&](int i, int j, int k, int step) {
+    const std::int64_t v = at(i, j, k);
+    const auto u = static_cast<std::size_t>(v);
+    if (inside[u] || outside[u]) return false;
+    const bool border = i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
+    if (!border && !outside[static_cast<std::size_t>(v - step)] &&
+        !outside[static_cast<std::size_t>(v - step * sy)] &&
+        !outside[static_cast<std::size_t>(v - step * sz)])
+      return false;
+    outside[u] = 1;
+    return true;
+  };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) changed |= reach(i, j, k, 1);
+    for (int k = nz - 1; k >= 0; --k)
+      for (int j = ny - 1; j >= 0; --j)
+        for (int i = nx - 1; i >= 0; --i) changed |= reach(i, j, k, -1);
+  }
+  for (std::size_t v = 0; v < inside.size(); ++v) inside[v] = !outside[v];
+}
+
 }  // namespace detail
 
 struct MeshOptions {
   double smoothing_sigma_voxels = 0.7;  ///< 0: no smoothing (iso-surface of the raw mask)
-  double iso = 0.5;  ///< every mask voxel centre ends up inside the surface, every other outside
+  /// Every mask voxel centre ends up inside the surface, every other outside, except the voxels
+  /// close_for_meshing adds (between diagonal neighbours, enclosed holes), which are inside.
+  double iso = 0.5;
 };
 
 /// The vessel surface of `mask` (nonzero = vessel) as a closed mesh in world mm. An empty
@@ -106,8 +180,8 @@ TriangleMesh mesh_from_mask(const Volume<T>& mask, const MeshOptions& options = 
                  options.smoothing_sigma_voxels <= 5,
              "mesh_from_mask: smoothing sigma must be in [0, 5] voxels, got "
                  << options.smoothing_sigma_voxels);
-  GIMM_CHECK(options.iso > 0 && options.iso < 1,
-             "mesh_from_mask: iso must be in (0, 1), got " << options.iso);
+  GIMM_CHECK(options.iso >= 1e-3 && options.iso <= 1 - 1e-3,
+             "mesh_from_mask: iso must be in [0.001, 0.999], got " << options.iso);
   // Bounding box of the mask.
   int lo[3] = {mask.nx(), mask.ny(), mask.nz()}, hi[3] = {-1, -1, -1};
   for (int k = 0; k < mask.nz(); ++k)
@@ -138,6 +212,8 @@ TriangleMesh mesh_from_mask(const Volume<T>& mask, const MeshOptions& options = 
           g[static_cast<std::size_t>((i - off[0]) + sy * (j - off[1]) + sz * (k - off[2]))] = 1.0f;
   std::vector<std::uint8_t> inside(g.size());
   for (std::size_t v = 0; v < g.size(); ++v) inside[v] = g[v] > 0.5f;
+  detail::close_for_meshing(inside, n[0], n[1], n[2]);
+  for (std::size_t v = 0; v < g.size(); ++v) g[v] = inside[v];
   // The blur moves the surface between voxel centres but must not carry it across one: a vessel
   // thinner than the blur would fade below the iso level and vanish (on a 1 mm grid most of a
   // coronary tree did). A voxel the blur moved to the wrong side of the iso level gets the value
