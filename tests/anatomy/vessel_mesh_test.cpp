@@ -98,7 +98,7 @@ TEST_CASE("Vessel mesh: a thin oblique tube stays closed and keeps its volume", 
   const TriangleMesh mesh = mesh_from_mask(mask);
   CHECK(mesh.is_closed());
   const double voxel_volume = static_cast<double>(count(mask)) * 0.4 * 0.4 * 0.5;
-  CHECK(mesh.enclosed_volume() == Approx(voxel_volume).epsilon(0.10));
+  CHECK(mesh.enclosed_volume() == Approx(voxel_volume).epsilon(0.03));
 }
 
 TEST_CASE("Vessel mesh: one-voxel vessels survive the blur in one piece, whatever their direction",
