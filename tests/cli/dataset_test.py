@@ -46,12 +46,12 @@ def same_tree(a, b, what):
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
-def check_pair_labels(pdir, what, files_per_view=4):
+def check_pair_labels(pdir, what, files_per_view=4, views=11):
     """Every dense label of a patient reprojects with its cameras and satisfies the exact F."""
     pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
-    check(len(pairs) == 27, f"{what}: 27 pairs per patient in shared mode, got {len(pairs)}")
-    check(len(os.listdir(os.path.join(pdir, "views"))) == 11 * files_per_view,
-          f"{what}: 11 views x {files_per_view} files (png, mask, camera, points[, overlap])")
+    check(len(pairs) == 27, f"{what}: 27 pairs per patient (6 RCA + 21 LCA), got {len(pairs)}")
+    check(len(os.listdir(os.path.join(pdir, "views"))) == views * files_per_view,
+          f"{what}: {views} views x {files_per_view} files (png, mask, camera, points[, overlap])")
     worst_px = worst_epi = 0.0
     for name in pairs:
         lab = json.load(open(os.path.join(pdir, "pairs", name)))
@@ -113,7 +113,11 @@ for root, _, files in os.walk(os.path.join(mesh_out, "patients")):
             pts = json.load(open(os.path.join(root, f)))
             hidden += sum(1 for i, vis in zip(pts["in_image"], pts["visible"]) if i and not vis)
             overlapping += sum(1 for i, o in zip(pts["in_image"], pts["overlap"]) if i and o >= 2)
-check(hidden > 0 and overlapping > 0, "mesh mode marks some in-image points occluded/overlapping")
+in_image = sum(sum(json.load(open(os.path.join(r, f)))["in_image"])
+               for r, _, fs in os.walk(os.path.join(mesh_out, "patients"))
+               for f in fs if f.endswith(".points.json"))
+check(0 < hidden < in_image / 4 and 0 < overlapping < in_image / 4,
+      f"mesh mode: {hidden} occluded and {overlapping} overlapping of {in_image} in-image points")
 # The overlap map: passages per pixel, > 0 exactly on the vessel mask.
 view = os.path.join(mesh_out, "patients", "phantom-0001", "views", "LCA_00")
 overlap_map, mask = read_png_gray(view + ".overlap.png"), read_png_gray(view + ".mask.png")
@@ -123,6 +127,16 @@ check(overlap_map.shape == (128, 128) and ((overlap_map > 0) == (mask > 0)).all(
 mesh_one = os.path.join(TMP, "mesh_one_thread")
 run(MESH + ["--out", mesh_one], env={"OMP_NUM_THREADS": "1"})
 same_tree(mesh_out, mesh_one, "mesh vessels on 1 thread against 2")
+
+# The released code's protocol: per-pair views (54 renders per patient) and orthographic
+# cameras; labels reproject and satisfy F (affine) there too.
+ortho = os.path.join(TMP, "per_pair_orthographic")
+run(["--phantom", "1", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet",
+     "--view-mode", "per_pair", "--model", "orthographic", "--out", ortho])
+opdir = os.path.join(ortho, "patients", "phantom-0000")
+check_pair_labels(opdir, "per-pair orthographic", views=54)
+cam = json.load(open(os.path.join(opdir, "views", "LCA_00.camera.json")))
+check(np.allclose(np.array(cam["P"])[2, :3], 0), f"orthographic P has an affine last row: {cam['P']}")
 
 # Split by patient: each patient in exactly one split file.
 seen = []
