@@ -80,6 +80,9 @@ for k, i in enumerate([] if pred_dir else lab["sparse"]):
         epipolar_line(ua, va, (0, 255, 255))
 for x, text in [(8, f"A: {lab['view_a']} (class {lab['view_class_a']})"),
                 (w + 8, f"B: {lab['view_b']} (class {lab['view_class_b']})")]:
+    # On a dark box: the edges of an angiogram are often white (air), which hid white text.
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.55, 1)
+    cv2.rectangle(canvas, (x - 4, 20 - th - 4), (x + tw + 4, 20 + base + 2), (0, 0, 0), -1)
     cv2.putText(canvas, text, (x, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (255, 255, 255), 1,
                 cv2.LINE_AA)
 cv2.imwrite(out, canvas)
