@@ -280,7 +280,8 @@ int main(int argc, char** argv) {
 
     nlohmann::json patients = nlohmann::json::array();
     const auto t0 = std::chrono::steady_clock::now();
-    std::size_t done = 0, failed = 0, resumed = 0;
+    std::size_t done = 0, failed = 0, resumed = 0, views_made = 0;
+    double view_seconds = 0;
     for (const auto* src : mine) {
       const fs::path done_file = fs::path(out) / "patients" / src->id / "done.json";
       nlohmann::json record;
@@ -291,7 +292,11 @@ int main(int argc, char** argv) {
       } else {
         try {
           record = gimm::generate_patient(*src, options, out);
-          record.erase("seconds");
+          view_seconds += record["view_seconds"].get<double>();
+          for (const auto& [name, sys] : record["systems"].items())
+            views_made += sys["views"].get<std::size_t>();
+          record.erase("seconds");  // timings stay out of the manifest: it must not vary
+          record.erase("view_seconds");
         } catch (const std::exception& e) {
           record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
           ++failed;
@@ -342,6 +347,9 @@ int main(int argc, char** argv) {
         "gimm-dataset: %zu patients (%zu failed): %zu views, %zu pairs, %zu dense labels -> %s\n",
         patients.size(), failed, views, pairs, labels,
         (fs::path(out) / shard.manifest_name()).c_str());
+    if (views_made > 0)  // everything per view: render, vessel mask, labels, files
+      std::printf("gimm-dataset: %zu views made in %.2f s, %.3f s per view\n", views_made,
+                  view_seconds, view_seconds / static_cast<double>(views_made));
     return failed == patients.size() && failed > 0 ? 1 : 0;
   });
 }

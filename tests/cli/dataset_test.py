@@ -230,11 +230,12 @@ LOUD = [a for a in COMMON if a != "--quiet"]
 proc = run(LOUD[:1] + ["1"] + LOUD[2:] + ["--out", os.path.join(TMP, "progress")])
 check("1/1 patients (0 resumed, 0 failed)" in proc.stderr and "patients/s, ETA 0 s" in proc.stderr,
       f"progress line: {proc.stderr!r}")
+check("11 views made in" in proc.stdout and "s per view" in proc.stdout, f"summary: {proc.stdout!r}")
 out = os.path.join(TMP, "progress_resumed")
 shutil.copytree(full, out)
 proc = run(LOUD + ["--out", out])
-check("4/4 patients (4 resumed, 0 failed), 0.000 patients/s, ETA ?" in proc.stderr,
-      f"progress line after a resume: {proc.stderr!r}")
+check("4/4 patients (4 resumed, 0 failed), 0.000 patients/s, ETA ?" in proc.stderr and
+      "views made in" not in proc.stdout, f"progress line after a resume: {proc.stderr!r}")
 
 out = os.path.join(TMP, "shards_missing")
 run(COMMON + ["--out", out, "--shard", "0/2"])
