@@ -96,13 +96,15 @@ void remove_stale_temporaries(const fs::path& dir, const std::string& name_prefi
     const std::string name = p.filename().string();
     return name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
   };
-  if (name_prefix.empty()) {
-    for (const auto& e : fs::recursive_directory_iterator(dir))
+  const auto scan = [&](auto entries) {
+    for (const auto& e : entries)
       if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
-  } else {
-    for (const auto& e : fs::directory_iterator(dir))
-      if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
-  }
+  };
+  // A prefix names top-level outputs only; without one, the whole (patient) folder.
+  if (name_prefix.empty())
+    scan(fs::recursive_directory_iterator(dir));
+  else
+    scan(fs::directory_iterator(dir));
   for (const auto& p : stale) fs::remove(p);
 }
 
@@ -265,13 +267,15 @@ int main(int argc, char** argv) {
     // Resuming: finished patients must have been made with these parameters (else the manifest
     // would describe files it did not make); unfinished ones lose their temporaries.
     remove_stale_run_temporaries(out, shard.manifest_name(), shard.sharded());
-    for (const auto* src : mine) {
-      const fs::path dir = fs::path(out) / "patients" / src->id;
+    std::vector<nlohmann::json> finished(mine.size());  // done.json of each, or null
+    for (std::size_t m = 0; m < mine.size(); ++m) {
+      const fs::path dir = fs::path(out) / "patients" / mine[m]->id;
       remove_stale_temporaries(dir);
       if (!fs::exists(dir / "done.json")) continue;
-      const nlohmann::json stored =
-          gimm::read_json_file(dir / "done.json").value("run", nlohmann::json());
-      const std::string difference = first_difference(stored, gimm::patient_run(*src, options));
+      finished[m] = gimm::read_json_file(dir / "done.json");
+      const nlohmann::json stored = finished[m].value("run", nlohmann::json());
+      finished[m].erase("run");
+      const std::string difference = first_difference(stored, gimm::patient_run(*mine[m], options));
       GIMM_CHECK(difference.empty(), "gimm-dataset: '"
                                          << dir.string() << "' was made with other parameters ("
                                          << difference << "); use another --out, or the parameters "
@@ -282,12 +286,11 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     std::size_t done = 0, failed = 0, resumed = 0, views_made = 0;
     double view_seconds = 0;
-    for (const auto* src : mine) {
-      const fs::path done_file = fs::path(out) / "patients" / src->id / "done.json";
+    for (std::size_t m = 0; m < mine.size(); ++m) {
+      const gimm::PatientSource* src = mine[m];
       nlohmann::json record;
-      if (fs::exists(done_file)) {
-        record = gimm::read_json_file(done_file);
-        record.erase("run");
+      if (!finished[m].is_null()) {
+        record = finished[m];
         ++resumed;
       } else {
         try {

@@ -91,6 +91,18 @@ inline double gaussian_blur(std::vector<float>& g, int nx, int ny, int nz, doubl
   return kernel[radius];
 }
 
+/// Whether voxel v reaches the voxel at v + (the steps of `axes`, a bit set) through voxels of
+/// `mask`, one axis at a time (a face-connected path inside the box the two span).
+inline bool face_path(const std::vector<std::uint8_t>& mask, std::int64_t v,
+                      const std::int64_t step[3], int axes) {
+  if (axes == 0) return true;
+  for (int a = 0; a < 3; ++a)
+    if ((axes >> a & 1) && mask[static_cast<std::size_t>(v + step[a])] &&
+        face_path(mask, v + step[a], step, axes & ~(1 << a)))
+      return true;
+  return false;
+}
+
 /// The voxels a mesh of `inside` (a dense 0/1 grid, zero border) must enclose so that its
 /// surface keeps the mask's 26-connectivity and has no hollows. The tetrahedra cut each cube
 /// along one diagonal, so they join a voxel to 14 of its 26 neighbours: two mask voxels that
@@ -104,36 +116,22 @@ inline void close_for_meshing(std::vector<std::uint8_t>& inside, int nx, int ny,
   for (int k = 1; k + 1 < nz; ++k)
     for (int j = 1; j + 1 < ny; ++j)
       for (int i = 1; i + 1 < nx; ++i) {
-        if (!mask[static_cast<std::size_t>(at(i, j, k))]) continue;
-        for (int dk = -1; dk <= 1; ++dk)
-          for (int dj = -1; dj <= 1; ++dj)
-            for (int di = -1; di <= 1; ++di) {
-              const int d[3] = {di, dj, dk};
-              if (std::abs(di) + std::abs(dj) + std::abs(dk) < 2) continue;
-              if (!mask[static_cast<std::size_t>(at(i + di, j + dj, k + dk))]) continue;
-              // A face path p -> ... -> q through the box they span, taking the axes in some
-              // order; if there is none, every voxel of the box joins the inside.
-              const int axes[3][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}};
-              bool path = false;
-              for (const auto& order : axes)
-                for (int flip = 0; flip < 2 && !path; ++flip) {
-                  int p[3] = {i, j, k};
-                  bool ok = true;
-                  for (int step = 0; step < 3 && ok; ++step) {
-                    const int a = order[flip ? 2 - step : step];
-                    if (d[a] == 0) continue;
-                    p[a] += d[a];
-                    ok = mask[static_cast<std::size_t>(at(p[0], p[1], p[2]))] != 0;
-                  }
-                  path = ok;
-                }
-              if (path) continue;
-              for (int c = 0; c < 8; ++c) {
-                const int q[3] = {i + ((c & 1) ? di : 0), j + ((c & 2) ? dj : 0),
-                                  k + ((c & 4) ? dk : 0)};
-                inside[static_cast<std::size_t>(at(q[0], q[1], q[2]))] = 1;
-              }
-            }
+        const std::int64_t v = at(i, j, k);
+        if (!mask[static_cast<std::size_t>(v)]) continue;
+        for (int c = 0; c < 27; ++c) {  // the 20 edge and corner neighbours
+          const int d[3] = {c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1};
+          const std::int64_t step[3] = {d[0], d[1] * sy, d[2] * sz};
+          const int axes = (d[0] != 0) | (d[1] != 0) << 1 | (d[2] != 0) << 2;
+          if (axes == 1 || axes == 2 || axes == 4 || axes == 0) continue;  // itself, faces
+          if (!mask[static_cast<std::size_t>(v + step[0] + step[1] + step[2])] ||
+              face_path(mask, v, step, axes))
+            continue;
+          for (int sub = 0; sub < 8; ++sub)  // every voxel of the box they span
+            if ((sub & axes) == sub)
+              inside[static_cast<std::size_t>(v + ((sub & 1) ? step[0] : 0) +
+                                              ((sub & 2) ? step[1] : 0) +
+                                              ((sub & 4) ? step[2] : 0))] = 1;
+        }
       }
   // Flood the background from the border (6-connected); what it does not reach is enclosed.
   // Sweeps forward and backward until nothing changes (a vessel box is mostly background, so a

@@ -68,29 +68,23 @@ struct VolumeGeometry {
 /// then spacing (1e-4 mm), origin (1e-3 mm) and axis directions (1e-4), as "what: a vs b".
 inline std::string grid_difference(const VolumeGeometry& a, const VolumeGeometry& b) {
   std::ostringstream out;
-  const auto vec = [&](const Eigen::Vector3d& v) {
-    out << "(" << v[0] << ", " << v[1] << ", " << v[2] << ")";
+  const auto differ = [&](const std::string& what, const Eigen::Vector3d& x,
+                          const Eigen::Vector3d& y) {
+    out << what << " (" << x[0] << ", " << x[1] << ", " << x[2] << ") vs (" << y[0] << ", " << y[1]
+        << ", " << y[2] << ")";
   };
   if (a.dims != b.dims) {
     out << "dimensions " << a.dims[0] << "x" << a.dims[1] << "x" << a.dims[2] << " vs " << b.dims[0]
         << "x" << b.dims[1] << "x" << b.dims[2];
   } else if ((a.spacing - b.spacing).cwiseAbs().maxCoeff() > 1e-4) {
-    out << "spacing ";
-    vec(a.spacing);
-    out << " vs ";
-    vec(b.spacing);
+    differ("spacing", a.spacing, b.spacing);
   } else if ((a.origin - b.origin).cwiseAbs().maxCoeff() > 1e-3) {
-    out << "origin ";
-    vec(a.origin);
-    out << " vs ";
-    vec(b.origin);
+    differ("origin", a.origin, b.origin);
   } else {
     for (int axis = 0; axis < 3; ++axis)
       if ((a.direction.col(axis) - b.direction.col(axis)).cwiseAbs().maxCoeff() > 1e-4) {
-        out << "direction of axis " << axis << " ";
-        vec(a.direction.col(axis));
-        out << " vs ";
-        vec(b.direction.col(axis));
+        differ("direction of axis " + std::to_string(axis), a.direction.col(axis),
+               b.direction.col(axis));
         break;
       }
   }

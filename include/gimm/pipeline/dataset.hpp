@@ -220,6 +220,27 @@ inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
           {"sparse", labels.sparse}};
 }
 
+/// Writes one view's files (`stem` + .png: the 16-bit angiogram; .mask.png; .overlap.png in
+/// mesh mode; .camera.json; .points.json) and returns its projected points. `overlap` and
+/// `mesh` are given in mesh mode only: the overlap map, and the projector that marks points
+/// hidden behind another vessel.
+inline std::vector<ProjectedPoint> write_view(
+    const std::filesystem::path& stem, const Image<float>& integrals, Image<std::uint8_t> vessel,
+    const Image<std::uint8_t>* overlap, const nlohmann::json& camera_json, const Camerad& camera,
+    const std::vector<LabelPoint>& points, const VesselMeshProjector* mesh) {
+  const auto file = [&](const char* suffix) { return stem.string() + suffix; };
+  write_png(file(".png"), to_uint16_min_max(beer_lambert(integrals)));
+  auto view = label_view(points, camera, &vessel, overlap);
+  if (mesh)
+    for (std::size_t n = 0; n < points.size(); ++n)
+      if (view[n].in_image) view[n].visible = mesh->unoccluded(camera, points[n].world);
+  for (auto& px : vessel.storage()) px = px ? 255 : 0;
+  write_png(file(".mask.png"), vessel);
+  if (overlap) write_png(file(".overlap.png"), *overlap);
+  write_json_file(file(".camera.json"), camera_json);
+  write_json_file(file(".points.json"), view_points_json(points, view), -1);
+  return view;
+}
 }  // namespace detail
 
 /// Generates one patient into out/patients/<id>/ and returns its record (also written as
@@ -255,8 +276,8 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   Rng rng = Rng(o.seed).fork(stable_hash(src.id));
   nlohmann::json record = {
       {"id", src.id}, {"split", src.split}, {"systems", nlohmann::json::object()}};
-  double view_seconds = 0;  // the view loops: renders, masks and the writes they wait for
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
+  double view_seconds = 0;  // the view loops: renders, masks and the writes they wait for
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
     const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
@@ -342,23 +363,13 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       cj["system"] = to_string(system);
       collect();
       in_flight =
-          std::async(std::launch::async, [&, integrals = std::move(integrals),
-                                          vessel = std::move(vessel), overlap = std::move(overlap),
-                                          cj = std::move(cj), camera, name]() mutable {
-            write_png(dir / "views" / (name + ".png"), to_uint16_min_max(beer_lambert(integrals)));
-            auto view = label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr);
-            if (mesh_mode)
-              for (std::size_t n = 0; n < points.size(); ++n)
-                if (view[n].in_image)
-                  view[n].visible = mesh_projector->unoccluded(camera, points[n].world);
-            for (auto& px : vessel.storage()) px = px ? 255 : 0;
-            write_png(dir / "views" / (name + ".mask.png"), vessel);
-            if (mesh_mode) write_png(dir / "views" / (name + ".overlap.png"), overlap);
-            write_json_file(dir / "views" / (name + ".camera.json"), cj);
-            write_json_file(dir / "views" / (name + ".points.json"),
-                            detail::view_points_json(points, view), -1);
-            return view;
-          });
+          std::async(std::launch::async,
+                     [&, integrals = std::move(integrals), vessel = std::move(vessel),
+                      overlap = std::move(overlap), cj = std::move(cj), camera, name]() mutable {
+                       return detail::write_view(dir / "views" / name, integrals, std::move(vessel),
+                                                 mesh_mode ? &overlap : nullptr, cj, camera, points,
+                                                 mesh_mode ? &*mesh_projector : nullptr);
+                     });
       cameras.push_back(camera);
       names.push_back(name);
     }
