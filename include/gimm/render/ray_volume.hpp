@@ -48,11 +48,13 @@ inline IndexRay to_index_ray(const VolumeGeometry& geometry, const Ray<double>& 
 /// Parameter interval [s_enter, s_exit] where the ray lies in the box lo <= p <= hi, restricted
 /// to s >= s_min. Returns false on a miss (including grazing a box of zero thickness). An axis
 /// the ray runs parallel to constrains nothing if the origin lies within the slab, and makes a
-/// miss otherwise.
+/// miss otherwise. A zero direction is a point, not a ray: a miss (its "chord" would be
+/// unbounded).
 inline bool clip_to_box(const IndexRay& ray, const glm::dvec3& lo, const glm::dvec3& hi,
                         double s_min, double& s_enter, double& s_exit) {
   s_enter = s_min;
   s_exit = std::numeric_limits<double>::infinity();
+  if (ray.direction == glm::dvec3(0.0)) return false;
   for (int a = 0; a < 3; ++a) {
     const double o = ray.origin[a], d = ray.direction[a];
     if (d == 0.0) {

@@ -37,7 +37,7 @@ struct JacobsTraversal {
   double sx, sy, sz;     // next crossing on each axis (mm along the ray)
   double dsx, dsy, dsz;  // distance between crossings on each axis
   double s, s_exit, sum = 0.0;
-  std::int64_t remaining = 0;  // plane crossings left before s_exit
+  std::int64_t cx = 0, cy = 0, cz = 0;  // crossings left on each axis before s_exit
   std::int64_t lin, lx, ly, lz;
   bool done = false;
 
@@ -58,7 +58,7 @@ struct JacobsTraversal {
     const double s_mid = 0.5 * (s_enter + s_exit);
     int step[3];
     double next[3], delta[3];
-    std::int64_t lin_step[3] = {0, 0, 0};
+    std::int64_t lin_step[3] = {0, 0, 0}, crossings[3] = {0, 0, 0};
     lin = 0;
     for (int a = 0; a < 3; ++a) {
       // The entry voxel: the one the ray moves into when the entry point lies on a plane.
@@ -74,40 +74,49 @@ struct JacobsTraversal {
         delta[a] = std::abs(1.0 / d[a]);
         next[a] = ((d[a] > 0 ? i + 1 : i) - o[a]) / d[a];
         // Crossings of this axis strictly before s_exit, never more than the planes left in
-        // the grid (so round-off at the exit can shorten the last sliver, never read outside).
+        // the grid on this axis. The budget is kept per axis, not summed: where the ray leaves
+        // through an edge or a corner, round-off can put the boundary plane of one axis before
+        // the last inner plane of another, and a summed budget would then step out of the grid.
         const double planes = std::ceil((s_exit - next[a]) / delta[a]);
         const std::int64_t room = d[a] > 0 ? n[a] - 1 - i : i;
-        remaining +=
+        crossings[a] =
             std::min<std::int64_t>(planes > 0 ? static_cast<std::int64_t>(planes) : 0, room);
+        if (crossings[a] == 0) next[a] = std::numeric_limits<double>::infinity();
       } else {
         delta[a] = 0;
         next[a] = std::numeric_limits<double>::infinity();
       }
     }
+    cx = crossings[0], cy = crossings[1], cz = crossings[2];
     sx = next[0], sy = next[1], sz = next[2];
     dsx = delta[0], dsy = delta[1], dsz = delta[2];
     lx = lin_step[0], ly = lin_step[1], lz = lin_step[2];
     s = s_enter;
   }
 
-  /// One voxel: adds its segment; returns true when the ray has left the volume. The number
-  /// of steps is known up front, so no index or exit test is needed per step.
+  /// One voxel: adds its segment; returns true when the ray has left the volume. Each axis
+  /// takes exactly its budget of crossings (an exhausted axis waits at infinity), so the index
+  /// stays inside the grid without a bounds test per step; when every axis is exhausted, the
+  /// last voxel runs to s_exit.
   bool step() {
     const double value = static_cast<double>(data[lin]);
-    if (remaining == 0) {
-      sum += (s_exit - s) * value;
-      return done = true;
-    }
-    --remaining;
     const bool x_first = sx <= sy && sx <= sz;
     const bool y_first = !x_first && sy <= sz;
     const bool z_first = !x_first && !y_first;
     const double s_cross = x_first ? sx : (y_first ? sy : sz);
+    if (s_cross == std::numeric_limits<double>::infinity()) {
+      sum += (s_exit - s) * value;
+      return done = true;
+    }
     sum += (s_cross - s) * value;
     s = s_cross;
-    sx += x_first ? dsx : 0.0;
-    sy += y_first ? dsy : 0.0;
-    sz += z_first ? dsz : 0.0;
+    cx -= x_first;
+    cy -= y_first;
+    cz -= z_first;
+    constexpr double kNever = std::numeric_limits<double>::infinity();
+    sx = x_first ? (cx > 0 ? sx + dsx : kNever) : sx;
+    sy = y_first ? (cy > 0 ? sy + dsy : kNever) : sy;
+    sz = z_first ? (cz > 0 ? sz + dsz : kNever) : sz;
     lin += x_first ? lx : (y_first ? ly : lz);
     return false;
   }
