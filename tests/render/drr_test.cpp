@@ -1,9 +1,11 @@
 // The DRR renderer: conventions (where things land), determinism, recipes.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <vector>
 
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/core/parallel.hpp"
+#include "gimm/core/rng.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/render/drr.hpp"
 
@@ -140,9 +142,44 @@ TEST_CASE("Attenuation: the reference recipe, voxel by voxel", "[render][recipe]
   CHECK(hu_to_mu(0) == Approx(mw));
   CHECK(recipe.mu(-500, false) == Approx(0.5 * mw));        // lung: below -100, unchanged
   CHECK(recipe.mu(50, false) == Approx(0.05 * 1.05 * mw));  // soft tissue x 0.05
-  CHECK(recipe.mu(400, true) == Approx(2 * 1.4 * mw + 0.1 * 1.4 * mw));   // vessel x2 + bone term
+  CHECK(recipe.mu(400, true) == Approx(3 * 1.4 * mw + 0.1 * 1.4 * mw));   // mu + 2 mu + bone term
   CHECK(recipe.mu(1000, false) == Approx(0.05 * 2 * mw + 0.1 * 2 * mw));  // bone: soft + bone term
-  CHECK(recipe.mu(50, true) == Approx(2 * 1.05 * mw));
+  CHECK(recipe.mu(50, true) == Approx(3 * 1.05 * mw));
+}
+
+TEST_CASE("Attenuation: the reference preset equals the reference's own computation",
+          "[render][recipe]") {
+  // The released generator computes, over whole arrays (project_ct_drr_orthographic_selective
+  // with its DRR_PARAMS: blood_hu_thresh -100, blood_suppress_factor 0.05, coronary_boost 2,
+  // bone_hu_thresh 200, bone_weight 0.10, mu_water 0.02):
+  //   mu = clip(0.02 (1 + HU / 1000), 0);  bg = mu; bg[(HU > -100) & ~cor] *= 0.05
+  //   mu_eff = bg + 2 * mu * cor + 0.10 * mu * (HU > 200)
+  // Written here step by step on a small volume covering every branch and the thresholds.
+  VolumeGeometry g;
+  g.dims = {6, 5, 4};
+  Volume<float> hu(g);
+  Volume<std::uint8_t> cor(g, 0);
+  Rng rng(41);
+  const float edges[] = {-1000, -100, 200, -100.5f, 200.5f, -1200};
+  for (std::size_t n = 0; n < hu.size(); ++n) {
+    hu.data()[n] = n < 6 ? edges[n] : static_cast<float>(rng.uniform(-1100, 1600));
+    cor.data()[n] = rng.uniform() < 0.4;
+  }
+  const std::size_t n_voxels = hu.size();
+  std::vector<double> mu(n_voxels), bg(n_voxels), expected(n_voxels);
+  for (std::size_t n = 0; n < n_voxels; ++n)
+    mu[n] = std::max(0.0, 0.02 * (1 + hu.data()[n] / 1000.0));
+  for (std::size_t n = 0; n < n_voxels; ++n)
+    bg[n] = (hu.data()[n] > -100 && !cor.data()[n]) ? mu[n] * 0.05 : mu[n];
+  for (std::size_t n = 0; n < n_voxels; ++n)
+    expected[n] = bg[n] + 2 * mu[n] * cor.data()[n] + 0.10 * mu[n] * (hu.data()[n] > 200);
+  ContrastRecipe recipe;
+  recipe.preset = ContrastPreset::reference;
+  const Volume<float> got = make_attenuation(hu, &cor, recipe);
+  for (std::size_t n = 0; n < n_voxels; ++n) {
+    INFO("voxel " << n << ": HU " << hu.data()[n] << ", coronary " << int(cor.data()[n]));
+    REQUIRE(got.data()[n] == Approx(expected[n]).epsilon(1e-6));
+  }
 }
 
 TEST_CASE("Attenuation: the angiography recipe suppresses the blood pool, keeps bone",

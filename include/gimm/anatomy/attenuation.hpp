@@ -7,19 +7,26 @@
 ///
 /// A recipe turns the CT (HU) and the mask of the injected coronary system into the
 /// attenuation volume the X-ray "sees":
-///   reference   - the released dataset's recipe, exactly (reference-notes.md):
-///                 mu0 = mu(HU); outside the injected mask, voxels with HU > -100 get 0.05 mu0;
-///                 inside the mask 2 mu0; then every voxel with HU > 200 adds 0.10 mu0 (bone).
+///   reference   - the released dataset's recipe, exactly (its project_ct_drr_*_selective
+///                 with the released DRR_PARAMS): mu0 = mu(HU); outside the injected mask,
+///                 voxels with HU > -100 get 0.05 mu0; inside the mask mu0 plus a coronary
+///                 boost of 2 mu0 (3 mu0 in all); then every voxel with HU > 200 adds
+///                 0.10 mu0 (bone). docs/recipes.md lists what else differs from the reference.
 ///   angiography - a selective coronary injection as a cath lab shows it: the injected lumen
-///                 holds iodine at `lumen_hu`; the CCTA's contrast-enhanced blood pool outside the
-///                 injected system (HU in [blood_pool_lo_hu, bone_hu)) reverts to native blood;
-///                 soft tissue is weighted by `soft_weight` (the faint background of a
-///                 log-windowed angiogram); bone (HU >= bone_hu) keeps `bone_weight`.
+///                 holds iodine at `lumen_hu`; the CCTA's contrast-enhanced blood outside the
+///                 injected system reverts to native blood; soft tissue is weighted by
+///                 `soft_weight` (the faint background of a log-windowed angiogram); bone keeps
+///                 `bone_weight`. Bone and contrast are told apart by structure, not by HU
+///                 alone (classify_dense_tissue): in a CCTA undiluted contrast in the vena cava
+///                 reaches 1000+ HU and trabecular bone sits at 150-400 HU, so no threshold
+///                 separates them. docs/recipes.md.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
+#include "gimm/anatomy/components.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/volume.hpp"
@@ -59,7 +66,7 @@ struct ContrastRecipe {
   // reference preset (released dataset)
   double reference_soft_threshold_hu = -100;
   double reference_soft_factor = 0.05;
-  double reference_vessel_factor = 2.0;
+  double reference_coronary_boost = 2.0;  ///< added to the injected lumen, times mu0
   double reference_bone_threshold_hu = 200;
   double reference_bone_weight = 0.10;
   // angiography preset
@@ -68,13 +75,32 @@ struct ContrastRecipe {
   /// coronary an optical depth of ~0.35, the dark, crisp vessels of a clinical angiogram
   /// (1400 HU, tried first, left them at ~0.12: barely visible over the heart shadow).
   double lumen_hu = 3000;
-  double blood_pool_lo_hu = 150;  ///< CCTA-enhanced blood starts here...
-  double bone_hu = 700;           ///< ...and bone starts here
+  double blood_pool_lo_hu = 150;  ///< CCTA-enhanced blood and bone start here
+  /// A dense component with no inside (thinner than 3 voxels) is bone from this mean HU on
+  /// (calcium, thin cortex), else blood (small enhanced vessels); also the per-voxel rule of
+  /// mu(hu, injected) when no structure is known.
+  double bone_hu = 700;
+  /// A dense component is bone when its surface is this much brighter than its inside.
+  double bone_shell_margin_hu = 150;
   double native_blood_hu = 45;
   double soft_weight = 0.35;
   double bone_weight = 1.0;
 
-  /// Attenuation (mm^-1) of one voxel.
+  /// What the angiography preset makes of a voxel at or above blood_pool_lo_hu.
+  enum class Dense : std::uint8_t { none = 0, blood = 1, bone = 2 };
+
+  /// Attenuation (mm^-1) of one voxel, with the angiography preset's dense class known
+  /// (classify_dense_tissue); the other presets ignore it.
+  double mu(double hu, bool injected, Dense dense) const {
+    if (preset != ContrastPreset::angiography) return mu(hu, injected);
+    if (injected) return hu_to_mu(std::max(hu, lumen_hu), mu_water);
+    if (dense == Dense::bone) return bone_weight * hu_to_mu(hu, mu_water);
+    const double tissue_hu = dense == Dense::blood ? native_blood_hu : hu;
+    return soft_weight * hu_to_mu(tissue_hu, mu_water);
+  }
+
+  /// Attenuation (mm^-1) of one voxel on its own: the angiography preset then calls every voxel
+  /// at or above bone_hu bone and every one in [blood_pool_lo_hu, bone_hu) blood.
   double mu(double hu, bool injected) const {
     const double mu0 = hu_to_mu(hu, mu_water);
     switch (preset) {
@@ -82,21 +108,78 @@ struct ContrastRecipe {
         return mu0;
       case ContrastPreset::reference: {
         double m = injected
-                       ? reference_vessel_factor * mu0
+                       ? (1.0 + reference_coronary_boost) * mu0
                        : (hu > reference_soft_threshold_hu ? reference_soft_factor * mu0 : mu0);
         if (hu > reference_bone_threshold_hu) m += reference_bone_weight * mu0;
         return m;
       }
-      case ContrastPreset::angiography: {
-        if (injected) return hu_to_mu(std::max(hu, lumen_hu), mu_water);
-        if (hu >= bone_hu) return bone_weight * mu0;
-        const double tissue_hu = hu >= blood_pool_lo_hu ? native_blood_hu : hu;
-        return soft_weight * hu_to_mu(tissue_hu, mu_water);
-      }
+      case ContrastPreset::angiography:
+        return mu(hu, injected,
+                  hu >= bone_hu            ? Dense::bone
+                  : hu >= blood_pool_lo_hu ? Dense::blood
+                                           : Dense::none);
     }
     return mu0;
   }
 };
+
+/// The dense tissue of a CCTA (HU >= blood_pool_lo_hu, outside the injected lumen), told apart
+/// by structure: per 26-connected component, bone when its surface (voxels with a face
+/// neighbour inside the grid below blood_pool_lo_hu) is brighter than its inside by
+/// bone_shell_margin_hu - a cortex around trabecular bone or marrow - and blood otherwise: a
+/// vessel or chamber is as bright or brighter inside (its edge is blurred by partial volume),
+/// however dense its contrast. The grid's own faces are not surface: a vessel cut by the scan's
+/// coverage stays blood. Components too thin to have an inside go by their mean HU (bone_hu).
+/// Limitation: a blood pool fused to bone at >= blood_pool_lo_hu forms one component and is
+/// classified as one (docs/recipes.md).
+struct DenseTissue {
+  Volume<std::uint8_t> classes;  ///< ContrastRecipe::Dense per voxel
+  int blood_components = 0, bone_components = 0;
+  std::int64_t blood_voxels = 0, bone_voxels = 0;
+};
+
+template <class T>
+DenseTissue classify_dense_tissue(const Volume<float>& hu, const Volume<T>* injected,
+                                  const ContrastRecipe& recipe) {
+  const auto n = static_cast<std::int64_t>(hu.size());
+  Volume<std::uint8_t> dense(hu.geometry(), 0);
+  for (std::int64_t v = 0; v < n; ++v)
+    dense.data()[v] =
+        hu.data()[v] >= recipe.blood_pool_lo_hu && !(injected && injected->data()[v] != T(0));
+  const Components comps = connected_components(dense);
+  // Mean HU of each component's surface and inside.
+  const int count = comps.count();
+  std::vector<double> shell_sum(count, 0.0), inner_sum(count, 0.0);
+  std::vector<std::int64_t> shell_n(count, 0), inner_n(count, 0);
+  const int nx = hu.nx(), ny = hu.ny(), nz = hu.nz();
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const std::int32_t id = comps.labels(i, j, k);
+        if (id == 0) continue;
+        const bool surface =
+            (i > 0 && !dense(i - 1, j, k)) || (i + 1 < nx && !dense(i + 1, j, k)) ||
+            (j > 0 && !dense(i, j - 1, k)) || (j + 1 < ny && !dense(i, j + 1, k)) ||
+            (k > 0 && !dense(i, j, k - 1)) || (k + 1 < nz && !dense(i, j, k + 1));
+        (surface ? shell_sum : inner_sum)[id - 1] += hu(i, j, k);
+        ++(surface ? shell_n : inner_n)[id - 1];
+      }
+  DenseTissue out;
+  std::vector<std::uint8_t> class_of(count + 1, 0);
+  using Dense = ContrastRecipe::Dense;
+  for (int c = 0; c < count; ++c) {
+    const double shell_mean = shell_n[c] ? shell_sum[c] / shell_n[c] : 0.0;
+    const bool bone = inner_n[c] == 0
+                          ? (shell_sum[c] + inner_sum[c]) / comps.sizes[c] >= recipe.bone_hu
+                          : shell_mean > inner_sum[c] / inner_n[c] + recipe.bone_shell_margin_hu;
+    class_of[c + 1] = static_cast<std::uint8_t>(bone ? Dense::bone : Dense::blood);
+    (bone ? out.bone_components : out.blood_components) += 1;
+    (bone ? out.bone_voxels : out.blood_voxels) += comps.sizes[c];
+  }
+  out.classes = std::move(dense);
+  for (std::int64_t v = 0; v < n; ++v) out.classes.data()[v] = class_of[comps.labels.data()[v]];
+  return out;
+}
 
 /// The attenuation volume (mm^-1) of `hu` under `recipe`, with `injected` (same grid, nonzero =
 /// injected lumen) or no injection when null. NaN HU is an error naming the voxel.
@@ -113,16 +196,55 @@ Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injecte
   const float* in = hu.data();
   float* out = mu.data();
   const auto n = static_cast<std::int64_t>(hu.size());
+  for (std::int64_t v = 0; v < n; ++v)  // before the structure: NaN would fall out of it
+    GIMM_CHECK(std::isfinite(in[v]), name << ": HU at voxel " << v << " is not finite");
+  const bool structure = recipe.preset == ContrastPreset::angiography;
+  const DenseTissue dense = structure ? classify_dense_tissue(hu, injected, recipe) : DenseTissue{};
   parallel_for(
       0, n,
       [&](std::int64_t v) {
-        const float h = in[v];
-        GIMM_CHECK(std::isfinite(h), name << ": HU at voxel " << v << " is not finite");
         const bool inj = injected && injected->data()[v] != T(0);
-        out[v] = static_cast<float>(recipe.mu(h, inj));
+        const auto cls = structure ? static_cast<ContrastRecipe::Dense>(dense.classes.data()[v])
+                                   : ContrastRecipe::Dense::none;
+        out[v] = static_cast<float>(recipe.mu(in[v], inj, cls));
       },
       1 << 16);
   return mu;
+}
+
+/// The index axis that runs head-foot: the one whose direction is closest to world z.
+inline int axial_axis(const VolumeGeometry& g) {
+  int best = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(g.direction(2, a)) > std::abs(g.direction(2, best))) best = a;
+  return best;
+}
+
+/// The patient beyond the scan's axial coverage, for rays that pass above or below it: a CCTA
+/// covers the heart (ImageCAS: 128 mm) while the detector sees ~190 mm, and rays that miss the
+/// volume would otherwise meet air and turn the image's top and bottom white. Pads the axial
+/// axis by `pad_mm` on both sides with copies of the first and last slices (tissue, spine and
+/// ribs carry on); docs/recipes.md. pad_mm = 0 returns the volume unchanged.
+template <class T>
+Volume<T> pad_axial(const Volume<T>& volume, double pad_mm) {
+  GIMM_CHECK(std::isfinite(pad_mm) && pad_mm >= 0 && pad_mm <= 1000,
+             "pad_axial: padding must be in [0, 1000] mm, got " << pad_mm);
+  VolumeGeometry g = volume.geometry();
+  const int axis = axial_axis(g);
+  const int pad = static_cast<int>(std::ceil(pad_mm / g.spacing[axis] - 1e-9));
+  if (pad == 0) return volume;
+  g.dims[axis] += 2 * pad;
+  g.origin -= g.direction.col(axis) * (g.spacing[axis] * pad);
+  Volume<T> out(g);
+  const int n_axis = volume.geometry().dims[axis];
+  for (int k = 0; k < out.nz(); ++k)
+    for (int j = 0; j < out.ny(); ++j)
+      for (int i = 0; i < out.nx(); ++i) {
+        int idx[3] = {i, j, k};
+        idx[axis] = std::clamp(idx[axis] - pad, 0, n_axis - 1);
+        out(i, j, k) = volume(idx[0], idx[1], idx[2]);
+      }
+  return out;
 }
 
 }  // namespace gimm

@@ -13,7 +13,10 @@
 ///            tortuosity. Dominance is right (PDA and PLB from the RCA) with probability 0.8,
 ///            left (from the LCx) 0.1, co-dominant 0.1, unless forced.
 /// Blood in the aorta, left heart and coronaries carries contrast (lumen HU from the seed,
-/// 350..450); the right heart slightly less. Seeds vary heart size, position and orientation,
+/// 350..450); the right heart slightly less; the superior vena cava holds undiluted contrast
+/// (800..1400 HU). Bones have a cortex (1000..1300 HU) around trabecular bone or marrow
+/// (160..320 HU), as in real CT, so the contrast recipe meets both cases that a threshold
+/// confuses. Seeds vary heart size, position and orientation,
 /// branch lengths and angles, dominance and lumen HU. Scanner noise is N(0, noise_hu),
 /// drawn per voxel from a counter-based hash, so the volume is the same on any thread count.
 ///
@@ -298,9 +301,23 @@ struct ThoraxLayout {
   Eigen::Vector2d chest_centre;  // x, y of the body axis
   double body_a = 165, body_b = 118;
   Ellipsoid lung_left, lung_right, la, ra, lv, rv;
-  Tube aorta_ascending, aorta_descending, pulmonary;
+  Tube aorta_ascending, aorta_descending, pulmonary, svc;
   Eigen::Vector3d aortic_root;
   double aortic_radius = 14;
+};
+
+/// HU of what a contrast recipe must tell apart, drawn from a stream of their own so that the
+/// anatomy of every seed is unchanged: undiluted contrast arriving in the superior vena cava
+/// (CCTA injects into an arm vein: 800-1400 HU, denser than any chest bone), cortical bone
+/// (1000-1300 HU) and trabecular bone and rib marrow (160-320 HU: a threshold at 700 HU calls
+/// it blood).
+struct TissueHu {
+  double svc, cortex, trabecular, marrow;
+  explicit TissueHu(Rng rng)
+      : svc(rng.uniform(800, 1400)),
+        cortex(rng.uniform(1000, 1300)),
+        trabecular(rng.uniform(160, 320)),
+        marrow(rng.uniform(160, 260)) {}
 };
 
 }  // namespace detail
@@ -367,6 +384,9 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   T.aorta_descending = {{arch_back, Vector3d(cx + 24, cy + 48, -200)}, 11.5};
   const Vector3d rvot = frame.surface(-4, -25, -12);
   T.pulmonary = {{rvot, rvot + Vector3d(6, 4, 30), rvot + Vector3d(12, 25, 45)}, 12};
+  // The SVC comes down on the patient's right of the ascending aorta into the top of the RA.
+  const Vector3d svc_inlet = T.ra.centre + Vector3d(-4, 6, 14);
+  T.svc = {{svc_inlet, svc_inlet + Vector3d(-6, 4, 40), svc_inlet + Vector3d(-8, 6, 260)}, 9};
 
   // --- Coronary tree.
   const double off = 1.6, step = 0.5;
@@ -479,6 +499,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   out.hu = Volume<std::int16_t>(grid);
   out.label = Volume<std::uint8_t>(grid, 0);
   const double lumen = A.lumen_hu, right_blood = A.lumen_hu - 80;
+  const TissueHu tissue(Rng(options.seed).fork(0x7155e));
   const double rib_spacing = 26, rib_phase = rng.uniform(0, rib_spacing);
   auto hu_at = [&](const Vector3d& p) -> double {
     const double bx = (p.x() - cx) / T.body_a, by = (p.y() - cy) / T.body_b;
@@ -488,6 +509,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     if (T.aorta_ascending.distance(p) < T.aortic_radius || T.aorta_descending.distance(p) < 11.5)
       return lumen;
     if (T.pulmonary.distance(p) < T.pulmonary.radius) return right_blood;
+    if (T.svc.distance(p) < T.svc.radius) return tissue.svc;
     const double v = frame.ventricle_level(p);
     if (v < 1) {
       if (T.lv.level(p) < 1) return lumen;
@@ -502,10 +524,12 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     // Skeleton.
     const double sx = p.x() - cx, sy = p.y() - (cy + 80);
     const double spine = std::hypot(sx, sy);
-    if (spine < 6) return 20;                         // spinal canal
-    if (spine < 19) return 260 + 400 * (spine > 16);  // vertebral body, cortex
-    if (std::abs(p.x() - cx) < 14 && p.y() < cy - T.body_b + 24 && p.y() > cy - T.body_b + 12)
-      return 450;  // sternum
+    if (spine < 6) return 20;                                                 // spinal canal
+    if (spine < 19) return spine > 16.5 ? tissue.cortex : tissue.trabecular;  // vertebral body
+    const double sternum_x = 14 - std::abs(p.x() - cx);
+    const double sternum_y = std::min(p.y() - (cy - T.body_b + 12), cy - T.body_b + 24 - p.y());
+    if (sternum_x > 0 && sternum_y > 0)  // sternum: 2 mm of cortex around marrow
+      return std::min(sternum_x, sternum_y) < 2 ? tissue.cortex : tissue.marrow;
     // Ribs: rings inside the body wall, sloping down anteriorly, interrupted at the sternum.
     const double theta = std::atan2(by, bx);
     const double ring_x = 0.86 * std::cos(theta), ring_y = 0.86 * std::sin(theta);
@@ -514,7 +538,8 @@ inline Phantom make_phantom(const PhantomOptions& options) {
       const double slope_z = p.z() + 22 * (1 - std::sin(theta));  // anterior ribs lower
       const double k = std::round((slope_z - rib_phase) / rib_spacing);
       const double dz = slope_z - rib_phase - k * rib_spacing;
-      if (std::hypot(wall, dz) < 5.5) return 650;
+      const double rib = std::hypot(wall, dz);
+      if (rib < 5.5) return rib > 3.5 ? tissue.cortex : tissue.marrow;
     }
     if (T.lung_left.level(p) < 1 || T.lung_right.level(p) < 1) return -850;
     if (body > 0.86 * 0.86 && body < 0.93 * 0.93) return 45;  // chest wall muscle
