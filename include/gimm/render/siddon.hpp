@@ -102,7 +102,6 @@ struct JacobsTraversal {
     const double value = static_cast<double>(data[lin]);
     const bool x_first = sx <= sy && sx <= sz;
     const bool y_first = !x_first && sy <= sz;
-    const bool z_first = !x_first && !y_first;
     const double s_cross = x_first ? sx : (y_first ? sy : sz);
     if (s_cross == std::numeric_limits<double>::infinity()) {
       sum += (s_exit - s) * value;
@@ -110,14 +109,17 @@ struct JacobsTraversal {
     }
     sum += (s_cross - s) * value;
     s = s_cross;
-    cx -= x_first;
-    cy -= y_first;
-    cz -= z_first;
     constexpr double kNever = std::numeric_limits<double>::infinity();
-    sx = x_first ? (cx > 0 ? sx + dsx : kNever) : sx;
-    sy = y_first ? (cy > 0 ? sy + dsy : kNever) : sy;
-    sz = z_first ? (cz > 0 ? sz + dsz : kNever) : sz;
-    lin += x_first ? lx : (y_first ? ly : lz);
+    if (x_first) {
+      lin += lx;
+      sx = --cx > 0 ? sx + dsx : kNever;
+    } else if (y_first) {
+      lin += ly;
+      sy = --cy > 0 ? sy + dsy : kNever;
+    } else {
+      lin += lz;
+      sz = --cz > 0 ? sz + dsz : kNever;
+    }
     return false;
   }
 };
