@@ -1,6 +1,6 @@
 // gimm-centerlines: 3D centerlines of a coronary label, per system, as JSON; optionally
 // compared with a ground-truth tree (the phantom's S.centerlines.json).
-//   gimm-centerlines --label L.nii.gz --out TREE.json [--truth S.centerlines.json]
+//   gimm-centerlines --label L.nii.gz|.nrrd|.mha --out TREE.json [--truth S.centerlines.json]
 //                    [--tolerance MM] [--min-spur MM]
 #include <chrono>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/skeleton.hpp"
 #include "gimm/io/centerlines_json.hpp"
-#include "gimm/io/nifti.hpp"
+#include "gimm/io/volume_file.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-centerlines: coronary centerlines (LCA and RCA) of a label volume"};
@@ -17,9 +17,11 @@ int main(int argc, char** argv) {
   std::string label_path, out_path, truth_path;
   double tolerance = 1.5;
   gimm::SkeletonOptions options;
-  app.add_option("--label", label_path, "coronary label (0/1), NIfTI")
+  app.add_option(
+         "--label", label_path,
+         "coronary label (0/1): NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr or MetaImage .mha/.mhd")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);  // a folder gets read_volume's advice on converting it
   app.add_option("--out", out_path, "output centerlines JSON")->required();
   app.add_option("--truth", truth_path, "ground-truth centerlines JSON to compare with")
       ->check(CLI::ExistingFile);
@@ -31,7 +33,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto label = gimm::read_nifti<std::uint8_t>(label_path);
+    const auto label = gimm::read_volume<std::uint8_t>(label_path);
     const auto split = gimm::split_coronary_systems(label, {}, label_path);
     const auto t1 = std::chrono::steady_clock::now();
     gimm::CenterlineTree tree;

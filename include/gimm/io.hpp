@@ -1,8 +1,12 @@
 #pragma once
-/// The io room (target gimm::io): JSON records, NIfTI volumes, PNG and NPY images.
+/// The io room (target gimm::io): JSON records, volumes (NIfTI, NRRD, MetaImage; read_volume
+/// picks by name), PNG and NPY images.
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/gzip.hpp"
+#include "gimm/io/metaimage.hpp"
 #include "gimm/io/nifti.hpp"
 #include "gimm/io/npy.hpp"
+#include "gimm/io/nrrd.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/io/volume_file.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-/// Whole-file reads and atomic writes.
+/// Whole-file and byte-range reads, and atomic writes.
 ///
 /// write_file_atomic writes to "<path>.tmp.<host>.<pid>" in the same directory, flushes, and
 /// renames over `path`, so a reader (or a run killed at any moment) sees either the old file or
@@ -7,11 +7,15 @@
 /// processes on different machines apart (every Kubernetes pod's process may be PID 1). Errors
 /// name the file and the OS reason.
 #include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -43,6 +47,46 @@ inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& p
   GIMM_CHECK_AS(IoError, !failed, "error reading '" << path.string() << "'");
   bytes.resize(got);
   return bytes;
+}
+
+/// The size of a file; errors name it and the OS reason.
+inline std::uint64_t file_size_of(const std::filesystem::path& path) {
+  std::error_code ec;
+  GIMM_CHECK_AS(IoError, !std::filesystem::is_directory(path, ec),
+                "'" << path.string() << "' is a folder, not a file");
+  const auto size = std::filesystem::file_size(path, ec);
+  GIMM_CHECK_AS(IoError, !ec, "cannot open '" << path.string() << "': " << ec.message());
+  return static_cast<std::uint64_t>(size);
+}
+
+/// `size` bytes from byte `offset` of the file into `dst` (a header read without the voxels, or
+/// the voxels read straight into a volume). A short read is an error with both counts.
+inline void read_file_range(const std::filesystem::path& path, std::uint64_t offset, void* dst,
+                            std::size_t size) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  GIMM_CHECK_AS(IoError, f != nullptr,
+                "cannot open '" << path.string() << "': " << std::strerror(errno));
+  GIMM_CHECK_AS(IoError, ::fseeko(f.get(), static_cast<off_t>(offset), SEEK_SET) == 0,
+                "cannot seek to byte " << offset << " of '" << path.string()
+                                       << "': " << std::strerror(errno));
+  const std::size_t got = size ? std::fread(dst, 1, size, f.get()) : 0;
+  GIMM_CHECK_AS(IoError, got == size,
+                "error reading '" << path.string() << "': expected " << size << " bytes at byte "
+                                  << offset << ", got " << got);
+}
+
+inline std::vector<unsigned char> read_file_range(const std::filesystem::path& path,
+                                                  std::uint64_t offset, std::size_t size) {
+  std::vector<unsigned char> bytes(size);
+  read_file_range(path, offset, bytes.data(), size);
+  return bytes;
+}
+
+/// The first min(limit, file size) bytes of a file: a text header without the data after it.
+inline std::vector<unsigned char> read_file_prefix(const std::filesystem::path& path,
+                                                   std::size_t limit) {
+  const std::uint64_t size = file_size_of(path);
+  return read_file_range(path, 0, static_cast<std::size_t>(std::min<std::uint64_t>(size, limit)));
 }
 
 namespace detail {

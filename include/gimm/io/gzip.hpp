@@ -3,9 +3,11 @@
 ///
 /// gzip_compress writes one gzip member with mtime 0 and no file name, so equal input gives
 /// equal bytes (the dataset pipeline's resume and shard checks compare files byte for byte).
-/// gzip_decompress accepts concatenated members (what `cat a.gz b.gz` and some writers make).
+/// gzip_decompress accepts concatenated members (what `cat a.gz b.gz` and some writers make);
+/// zlib_decompress reads zlib-wrapped deflate (MetaImage) or gzip.
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -18,26 +20,32 @@ inline bool is_gzip(const std::vector<unsigned char>& bytes) {
   return bytes.size() >= 2 && bytes[0] == 0x1f && bytes[1] == 0x8b;
 }
 
-/// Inflates every gzip member of `bytes`. `what` names the input in errors. Refuses to grow
-/// past `max_bytes` (a guard against decompression bombs and absurd headers).
-inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned char>& bytes,
-                                                  const std::string& what,
-                                                  std::uint64_t max_bytes = 16ull << 30) {
-  GIMM_CHECK(bytes.size() < (1ull << 32),
-             "'" << what << "': compressed files over 4 GiB are not supported");
+namespace detail {
+/// Inflates `size` bytes at `data`: zlib's inflate with `window_bits` (15 + 16: gzip, 15 + 32:
+/// zlib or gzip, told by the header), streams back to back (another follows when input is left
+/// over). `what` names the input in errors; growing past `max_bytes` is an error (a guard
+/// against decompression bombs and absurd headers).
+inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std::size_t size,
+                                                  const std::string& what, std::uint64_t max_bytes,
+                                                  int window_bits, const char* format) {
+  GIMM_CHECK(size < (1ull << 32), "'" << what << "': compressed data over 4 GiB is not supported");
   z_stream z{};
-  GIMM_CHECK_AS(FormatError, inflateInit2(&z, 15 + 16) == Z_OK,
+  GIMM_CHECK_AS(FormatError, inflateInit2(&z, window_bits) == Z_OK,
                 "'" << what << "': cannot initialise zlib");
-  std::vector<unsigned char> out(std::max<std::size_t>(bytes.size() * 4, 1 << 16));
-  z.next_in = const_cast<unsigned char*>(bytes.data());
-  z.avail_in = static_cast<uInt>(bytes.size());
+  std::vector<unsigned char> out(
+      std::min<std::uint64_t>(std::max<std::uint64_t>(std::uint64_t(size) * 4, 1 << 16),
+                              std::max<std::uint64_t>(max_bytes, 1)));
+  z.next_in = const_cast<unsigned char*>(data);
+  z.avail_in = static_cast<uInt>(size);
   std::size_t produced = 0;
   int status = Z_OK;
   for (;;) {
     if (produced == out.size()) {
       if (out.size() >= max_bytes) {
         inflateEnd(&z);
-        GIMM_FAIL("'" << what << "': decompressed data exceeds " << max_bytes << " bytes");
+        GIMM_CHECK_AS(FormatError, false,
+                      "'" << what << "': " << format << " data inflates to more than " << max_bytes
+                          << " bytes");
       }
       out.resize(std::min<std::uint64_t>(out.size() * 2, max_bytes));
     }
@@ -48,7 +56,7 @@ inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned cha
     produced += room - z.avail_out;
     if (status == Z_STREAM_END) {
       if (z.avail_in == 0) break;
-      inflateReset(&z);  // another gzip member follows
+      inflateReset(&z);  // another member (stream) follows
       continue;
     }
     if (status == Z_BUF_ERROR && z.avail_in == 0) break;  // input ended mid-stream
@@ -57,10 +65,29 @@ inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned cha
   const std::string message = z.msg ? z.msg : "";
   inflateEnd(&z);
   GIMM_CHECK_AS(FormatError, status == Z_STREAM_END,
-                "'" << what << "': gzip data is "
-                    << (status == Z_BUF_ERROR ? "truncated" : "corrupt: " + message));
+                "'" << what << "': " << format << " data is "
+                    << (status == Z_BUF_ERROR ? "truncated" : "corrupt: " + message)
+                    << " (after inflating " << produced << " bytes)");
   out.resize(produced);
   return out;
+}
+}  // namespace detail
+
+/// Inflates every gzip member of `bytes`. `what` names the input in errors. Refuses to grow
+/// past `max_bytes` (a guard against decompression bombs and absurd headers).
+inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned char>& bytes,
+                                                  const std::string& what,
+                                                  std::uint64_t max_bytes = 16ull << 30) {
+  return detail::inflate_streams(bytes.data(), bytes.size(), what, max_bytes, 15 + 16, "gzip");
+}
+
+/// Inflates zlib data (RFC 1950: deflate with a 2-byte header and an Adler-32 trailer, what
+/// MetaImage's CompressedData holds), or gzip data: the wrapper is told by its first bytes, as
+/// MetaIO's own reader does (inflateInit2 with 15 + 32).
+inline std::vector<unsigned char> zlib_decompress(const unsigned char* data, std::size_t size,
+                                                  const std::string& what,
+                                                  std::uint64_t max_bytes = 16ull << 30) {
+  return detail::inflate_streams(data, size, what, max_bytes, 15 + 32, "zlib");
 }
 
 /// One gzip member of `size` bytes at `data`; level 1 (fast) to 9 (small).

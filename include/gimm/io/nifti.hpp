@@ -14,7 +14,8 @@
 /// Stored types: uint8, int8, int16, uint16, int32, uint32, float32, float64, in either byte
 /// order. scl_slope/scl_inter are applied on read (slope 0 or non-finite means "no scaling",
 /// as the standard says). Reading into an integer T requires every scaled value to be an
-/// integer in T's range; anything else is an error naming the voxel, never a silent clamp.
+/// integer in T's range; anything else is an error naming the voxel, never a silent clamp (the
+/// conversion is voxel_data.hpp's, shared with the NRRD and MetaImage readers).
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,7 @@
 #include "gimm/core/volume.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/gzip.hpp"
+#include "gimm/io/voxel_data.hpp"
 
 namespace gimm {
 
@@ -76,6 +78,28 @@ constexpr int nifti_datatype_of() {
   return 0;
 }
 
+/// The stored type of a datatype code nifti_bytes_per_voxel accepts.
+inline StoredType nifti_stored_type(int datatype) {
+  switch (datatype) {
+    case nifti_int8:
+      return StoredType::int8;
+    case nifti_int16:
+      return StoredType::int16;
+    case nifti_uint16:
+      return StoredType::uint16;
+    case nifti_int32:
+      return StoredType::int32;
+    case nifti_uint32:
+      return StoredType::uint32;
+    case nifti_float32:
+      return StoredType::float32;
+    case nifti_float64:
+      return StoredType::float64;
+    default:  // nifti_uint8
+      return StoredType::uint8;
+  }
+}
+
 inline int nifti_bytes_per_voxel(int datatype) {
   switch (datatype) {
     case nifti_uint8:
@@ -93,10 +117,6 @@ inline int nifti_bytes_per_voxel(int datatype) {
     default:
       return 0;
   }
-}
-
-inline void swap_bytes(unsigned char* p, int n) {
-  std::reverse(p, p + n);
 }
 
 /// Reads little- or big-endian header fields.
@@ -260,49 +280,6 @@ inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
   return parse_nifti_header(bytes.data(), bytes.size(), bytes.size(), what);
 }
 
-template <class T>
-T nifti_convert(double value, std::size_t voxel, const std::string& what) {
-  if constexpr (std::is_floating_point_v<T>) {
-    (void)voxel;
-    (void)what;
-    return static_cast<T>(value);
-  } else {
-    GIMM_CHECK_AS(FormatError,
-                  value == std::round(value) &&
-                      value >= static_cast<double>(std::numeric_limits<T>::lowest()) &&
-                      value <= static_cast<double>(std::numeric_limits<T>::max()),
-                  "'" << what << "': voxel " << voxel << " has value " << value
-                      << ", which does not fit the requested integer type");
-    return static_cast<T>(value);
-  }
-}
-
-template <class Stored, class T>
-void nifti_decode(const unsigned char* src, const NiftiHeader& header, const std::string& what,
-                  T* dst, std::size_t count) {
-  const bool scaled = header.scl_slope != 1.0 || header.scl_inter != 0.0;
-  if constexpr (std::is_same_v<Stored, T>) {
-    if (!scaled && !header.byte_swapped) {  // the common case: one copy
-      std::memcpy(dst, src, count * sizeof(T));
-      return;
-    }
-  }
-  for (std::size_t n = 0; n < count; ++n) {
-    unsigned char raw[sizeof(Stored)];
-    std::memcpy(raw, src + n * sizeof(Stored), sizeof(Stored));
-    if (header.byte_swapped) swap_bytes(raw, sizeof(Stored));
-    Stored stored;
-    std::memcpy(&stored, raw, sizeof(Stored));
-    if (!scaled && std::is_same_v<Stored, T>) {
-      dst[n] = static_cast<T>(stored);
-      continue;
-    }
-    const double value = scaled ? static_cast<double>(stored) * header.scl_slope + header.scl_inter
-                                : static_cast<double>(stored);
-    dst[n] = nifti_convert<T>(value, n, what);
-  }
-}
-
 /// Rotation (det +1) to NIfTI quaternion (b, c, d) with a >= 0.
 inline Eigen::Vector3d nifti_rotation_to_quaternion(const Eigen::Matrix3d& R) {
   Eigen::Quaterniond q(R);
@@ -365,34 +342,8 @@ Volume<T> read_nifti(const std::filesystem::path& path) {
   const NiftiHeader header = detail::parse_nifti_header(bytes, what);
   Volume<T> volume(header.geometry);
   const unsigned char* src = bytes.data() + header.vox_offset;
-  T* dst = volume.data();
-  const std::size_t n = volume.size();
-  switch (header.datatype) {
-    case nifti_uint8:
-      detail::nifti_decode<std::uint8_t>(src, header, what, dst, n);
-      break;
-    case nifti_int8:
-      detail::nifti_decode<std::int8_t>(src, header, what, dst, n);
-      break;
-    case nifti_int16:
-      detail::nifti_decode<std::int16_t>(src, header, what, dst, n);
-      break;
-    case nifti_uint16:
-      detail::nifti_decode<std::uint16_t>(src, header, what, dst, n);
-      break;
-    case nifti_int32:
-      detail::nifti_decode<std::int32_t>(src, header, what, dst, n);
-      break;
-    case nifti_uint32:
-      detail::nifti_decode<std::uint32_t>(src, header, what, dst, n);
-      break;
-    case nifti_float32:
-      detail::nifti_decode<float>(src, header, what, dst, n);
-      break;
-    case nifti_float64:
-      detail::nifti_decode<double>(src, header, what, dst, n);
-      break;
-  }
+  detail::decode_voxels(detail::nifti_stored_type(header.datatype), src, header.byte_swapped,
+                        header.scl_slope, header.scl_inter, what, volume.data(), volume.size());
   return volume;
 }
 
