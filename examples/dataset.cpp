@@ -2,7 +2,9 @@
 //   gimm-dataset (--input DIR | --phantom COUNT) --out DIR [--seed S] [--phantom-size
 //   small|imagecas]
 //                [--view-mode shared|per_pair] [--shard I/N] [camera flags] [--recipe R]
+//                [--allow-single-system] [--warn-dropped FRACTION] [--export reference]
 //   gimm-dataset merge --out DIR        joins the shard manifests of DIR into manifest.json
+// --input DIR is searched with its sub-folders for <id>.img<ext> + <id>.label<ext>.
 // Shards: --shard I/N, else SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT, else
 // JOB_COMPLETION_INDEX (Kubernetes Indexed Job) + GIMM_SHARD_COUNT. Patient k (in id order)
 // belongs to shard k mod N. A killed run started again skips finished patients (done.json).
@@ -11,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -129,6 +132,11 @@ std::string first_difference(const nlohmann::json& stored, const nlohmann::json&
   return path + ": " + was + " there, " + now + " here";
 }
 
+/// --export reference needs ids the reference layout can name: checked before any work.
+void check_export_ids(const std::string& format, const std::vector<std::string>& ids) {
+  if (!format.empty()) gimm::reference_format::check_patient_ids(ids, "--export " + format);
+}
+
 /// --export reference: the released dataset's layout in OUT/reference.
 void export_if_asked(const std::string& format, const fs::path& out) {
   if (format.empty()) return;
@@ -136,7 +144,7 @@ void export_if_asked(const std::string& format, const fs::path& out) {
   std::printf("gimm-dataset: reference layout -> %s\n", (out / "reference").c_str());
 }
 
-int merge(const fs::path& out) {
+int merge(const fs::path& out, const std::string& export_format) {
   GIMM_CHECK(fs::is_directory(out), "merge: '" << out.string() << "' is not a directory");
   remove_stale_run_temporaries(out, "manifest.json", false);
   std::vector<fs::path> shards;
@@ -167,6 +175,10 @@ int merge(const fs::path& out) {
   std::sort(patients.begin(), patients.end(), [](const auto& a, const auto& b) {
     return a["id"].template get<std::string>() < b["id"].template get<std::string>();
   });
+  std::vector<std::string> ok_ids;
+  for (const auto& p : patients)
+    if (p.value("status", "") == "ok") ok_ids.push_back(p["id"].get<std::string>());
+  check_export_ids(export_format, ok_ids);
   merged["patients"] = patients;
   merged.erase("shard");
   gimm::write_json_file(out / "manifest.json", merged);
@@ -190,7 +202,9 @@ int main(int argc, char** argv) {
   int phantom_count = 0;
   bool quiet = false;
   std::string export_format;
-  app.add_option("--input", input, "folder of ImageCAS-style N.img.nii.gz + N.label.nii.gz");
+  app.add_option("--input", input,
+                 "folder (sub-folders included) of ImageCAS-style <id>.img<ext> + "
+                 "<id>.label<ext>, <ext> e.g. .nii.gz");
   app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
       ->check(CLI::PositiveNumber);
   app.add_option("--phantom-size", phantom_size, "small|imagecas")
@@ -205,6 +219,11 @@ int main(int argc, char** argv) {
   app.add_option("--recipe", recipe, "reference|angiography")
       ->check(CLI::IsMember({"reference", "angiography"}))
       ->capture_default_str();
+  app.add_option("--pad-mm", options.pad_mm,
+                 "tissue beyond the scan's axial coverage, mm on each side (copies of the edge "
+                 "slices; 0 = air, as the reference)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   app.add_option("--projector", projector, "siddon|trilinear")
       ->check(CLI::IsMember({"siddon", "trilinear"}))
       ->capture_default_str();
@@ -213,7 +232,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"voxel", "mesh"}))
       ->capture_default_str();
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
-  app.add_flag("--quiet", quiet, "no progress line");
+  app.add_flag("--allow-single-system", options.allow_single_system,
+               "a label of one tree: make that system only (assigned by the volume centre), "
+               "record the other as absent");
+  app.add_option("--warn-dropped", options.warn_dropped_fraction,
+                 "warn when the LCA/RCA split drops more than this fraction of a label's voxels")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_flag("--quiet", quiet, "no progress line, no per-patient timings");
   flags.add(app, options.carm, false);
   app.add_option("--export", export_format,
                  "also write OUT/reference in the released dataset's layout")
@@ -224,7 +250,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"reference"}));
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {
-      const int status = merge(out);
+      const int status = merge(out, export_format);
       export_if_asked(export_format, out);
       return status;
     }
@@ -253,6 +279,11 @@ int main(int argc, char** argv) {
         s.phantom_size = gimm::parse_phantom_size(phantom_size);
         sources.push_back(s);
       }
+    }
+    {
+      std::vector<std::string> ids;
+      for (const auto& s : sources) ids.push_back(s.id);
+      check_export_ids(export_format, ids);
     }
     gimm::assign_splits(sources, options);
     fs::create_directories(out);
@@ -284,8 +315,15 @@ int main(int argc, char** argv) {
 
     nlohmann::json patients = nlohmann::json::array();
     const auto t0 = std::chrono::steady_clock::now();
-    std::size_t done = 0, failed = 0, resumed = 0, views_made = 0;
-    double view_seconds = 0;
+    std::size_t done = 0, failed = 0, resumed = 0;
+    gimm::PatientTimings made_timings;  // the patients made in this run
+    int progress_width = 0;             // of the progress line on screen, to overwrite it
+    const auto log_line = [&](const std::string& text) {
+      if (progress_width > 0)
+        std::fprintf(stderr, "\r%-*s\n", progress_width, text.c_str());
+      else
+        std::fprintf(stderr, "%s\n", text.c_str());
+    };
     for (std::size_t m = 0; m < mine.size(); ++m) {
       const gimm::PatientSource* src = mine[m];
       nlohmann::json record;
@@ -294,17 +332,16 @@ int main(int argc, char** argv) {
         ++resumed;
       } else {
         try {
-          record = gimm::generate_patient(*src, options, out);
-          view_seconds += record["view_seconds"].get<double>();
-          for (const auto& [name, sys] : record["systems"].items())
-            views_made += sys["views"].get<std::size_t>();
-          record.erase("seconds");  // timings stay out of the manifest: it must not vary
-          record.erase("view_seconds");
+          gimm::PatientTimings t;
+          record = gimm::generate_patient(*src, options, out, &t);
+          made_timings += t;
+          if (!quiet) log_line("gimm-dataset: patient " + src->id + ": " + t.summary());
+          const std::string warning = gimm::dropped_voxels_warning(record, options);
+          if (!warning.empty()) log_line("gimm-dataset: warning: " + warning);
         } catch (const std::exception& e) {
           record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
           ++failed;
-          std::fprintf(stderr, "\ngimm-dataset: patient %s failed: %s\n", src->id.c_str(),
-                       e.what());
+          log_line("gimm-dataset: patient " + src->id + " failed: " + e.what());
         }
       }
       patients.push_back(record);
@@ -317,10 +354,13 @@ int main(int argc, char** argv) {
         const double rate = made / std::max(s, 1e-9);
         std::string eta = "?";
         if (made > 0) eta = std::to_string(std::llround((mine.size() - done) / rate)) + " s";
-        std::fprintf(stderr,
-                     "\rgimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, "
-                     "ETA %s   ",
-                     done, mine.size(), resumed, failed, rate, eta.c_str());
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "gimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, "
+                      "ETA %s   ",
+                      done, mine.size(), resumed, failed, rate, eta.c_str());
+        std::fprintf(stderr, "\r%s", line);
+        progress_width = static_cast<int>(std::strlen(line));
       }
     }
     if (!quiet) std::fprintf(stderr, "\n");
@@ -350,9 +390,13 @@ int main(int argc, char** argv) {
         "gimm-dataset: %zu patients (%zu failed): %zu views, %zu pairs, %zu dense labels -> %s\n",
         patients.size(), failed, views, pairs, labels,
         (fs::path(out) / shard.manifest_name()).c_str());
-    if (views_made > 0)  // everything per view: render, vessel mask, labels, files
-      std::printf("gimm-dataset: %zu views made in %.2f s, %.3f s per view\n", views_made,
-                  view_seconds, view_seconds / static_cast<double>(views_made));
+    if (made_timings.view_count > 0) {  // everything per view: render, vessel mask, labels, files
+      std::printf("gimm-dataset: %zu views made in %.2f s, %.3f s per view\n",
+                  made_timings.view_count, made_timings.views,
+                  made_timings.views / static_cast<double>(made_timings.view_count));
+      std::printf("gimm-dataset: time by stage (patients made in this run): %s\n",
+                  made_timings.summary().c_str());
+    }
     return failed == patients.size() && failed > 0 ? 1 : 0;
   });
 }

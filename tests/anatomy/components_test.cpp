@@ -53,14 +53,35 @@ TEST_CASE("Split: bad labels are refused with the value and the name", "[anatomy
   rod(v, 3, 12);
   CHECK_THROWS_WITH(split_coronary_systems(v, {}, "patient 9 label"),
                     Catch::Contains("only one coronary component"));
+  // The refusal says how to accept it where the user can: gimm-dataset's flag or the option.
+  CHECK_THROWS_WITH(split_coronary_systems(v, {}, "patient 9 label"),
+                    Catch::Contains("pass --allow-single-system to gimm-dataset") &&
+                        Catch::Contains("allow_single in SplitOptions"));
   SplitOptions single;
   single.allow_single = true;
   single.heart_center_x = 10.0;  // the rod at x = 3 lies to the right of it: an RCA
   const auto split = split_coronary_systems(v, single);
   CHECK(split.rca_voxels == 24);
   CHECK(split.lca_voxels == 0);
+  CHECK(split.components == 1);
+  CHECK(split.dropped_voxels == 0);
   rod(v, 16, 9);
   v(0, 0, 0) = 2;
   CHECK_THROWS_WITH(split_coronary_systems(v, {}, "patient 9 label"),
                     Catch::Contains("must hold only 0 and 1, found 2"));
+}
+
+TEST_CASE("Split: what is left out is counted", "[anatomy][split]") {
+  auto v = empty_label();
+  rod(v, 3, 12);    // 24 voxels
+  rod(v, 16, 11);   // 22 voxels
+  rod(v, 10, 10);   // 20 voxels: a third tree, beyond the two largest
+  v(6, 2, 17) = 1;  // a speck
+  const auto split = split_coronary_systems(v);
+  CHECK(split.components == 4);
+  CHECK(split.label_voxels == 67);
+  CHECK(split.lca_voxels + split.rca_voxels == 46);
+  CHECK(split.dropped_voxels == 21);
+  CHECK(split.dropped_fraction() == Approx(21.0 / 67.0));
+  CHECK(CoronarySplit{}.dropped_fraction() == 0.0);
 }

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """gimm-dataset end to end: labels reproject, split by patient, a run killed at any moment
-and restarted equals an uninterrupted run byte for byte, N shards merged equal one run, and
-bad patients are recorded while the rest goes on.
+and restarted equals an uninterrupted run byte for byte (timings.json aside: wall-clock), N
+shards merged equal one run, bad patients are recorded while the rest goes on, ImageCAS
+sub-folders, dropped label voxels, single-tree labels and stage timings.
 
 Usage: dataset_test.py BIN_DIR TMP_DIR
 """
@@ -37,12 +38,18 @@ def tree_files(root):
     return sorted(out)
 
 
+# Wall-clock seconds per stage: the one file that differs between runs by design.
+NOT_REPRODUCIBLE = "timings.json"
+
+
 def same_tree(a, b, what):
+    """The same files, byte for byte, but timings.json (which must be there in both)."""
     fa, fb = tree_files(a), tree_files(b)
     if fa != fb:
         check(False, f"{what}: file lists differ: {sorted(set(fa) ^ set(fb))[:10]}")
         return
-    diff = [f for f in fa if not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
+    diff = [f for f in fa if os.path.basename(f) != NOT_REPRODUCIBLE and
+            not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
@@ -85,6 +92,17 @@ check(len(manifest["patients"]) == 4 and all(p["status"] == "ok" for p in manife
       "four ok patients")
 pdir = os.path.join(full, "patients", "phantom-0001")
 pairs = check_pair_labels(pdir, "voxel vessels")
+# Stage timings: a timings.json per patient; done.json and the manifest hold none.
+STAGES = ["read", "split", "centerlines", "attenuation", "mesh", "views", "pairs", "writes"]
+for p in manifest["patients"]:
+    t = json.load(open(os.path.join(full, "patients", p["id"], "timings.json")))
+    done = open(os.path.join(full, "patients", p["id"], "done.json")).read()
+    check(t["id"] == p["id"] and t["views"] == 11 and t["seconds"]["total"] > 0 and
+          all(s in t["seconds"] for s in STAGES) and "seconds" not in done,
+          f"{p['id']}: timings.json {t}, done.json has seconds: {'seconds' in done}")
+    check(p["label"]["components"] == 2 and p["label"]["dropped_voxels"] == 0 and
+          all(sys["present"] for sys in p["systems"].values()), f"{p['id']}: record {p}")
+check("seconds" not in open(os.path.join(full, "manifest.json")).read(), "timings in the manifest")
 # Per-view points: the branch/point indices address centerlines.json, and the pair labels are
 # exactly the points valid (in image, on mask) in both views.
 tree = json.load(open(os.path.join(pdir, "centerlines.json")))
@@ -231,6 +249,13 @@ proc = run(LOUD[:1] + ["1"] + LOUD[2:] + ["--out", os.path.join(TMP, "progress")
 check("1/1 patients (0 resumed, 0 failed)" in proc.stderr and "patients/s, ETA 0 s" in proc.stderr,
       f"progress line: {proc.stderr!r}")
 check("11 views made in" in proc.stdout and "s per view" in proc.stdout, f"summary: {proc.stdout!r}")
+# The per-patient line and the summary name every stage.
+patient_line = [ln for ln in proc.stderr.replace("\r", "\n").splitlines()
+                if ln.startswith("gimm-dataset: patient phantom-0000: ")]
+check(len(patient_line) == 1 and all(f" {s} " in patient_line[0] for s in STAGES) and
+      "(11 views, " in patient_line[0], f"per-patient line: {proc.stderr!r}")
+check("time by stage" in proc.stdout and all(f" {s} " in proc.stdout for s in STAGES),
+      f"stage summary: {proc.stdout!r}")
 out = os.path.join(TMP, "progress_resumed")
 shutil.copytree(full, out)
 proc = run(LOUD + ["--out", out])
@@ -273,8 +298,40 @@ flipped = lab4.affine.copy()
 flipped[:3, 1] *= -1
 nib.save(nib.Nifti1Image(np.asarray(lab4.dataobj), flipped), os.path.join(folder, "4.label.nii.gz"))
 shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "4.img.nii.gz"))
+# Patient 7: a third tree in the label (a 6^3 block in a corner, 216 voxels, over 5% of this
+# phantom's label): made from the two largest, the rest recorded and warned about. Patient 8:
+# one tree only.
+lab7 = np.asarray(lab1.dataobj).copy()
+check(0.05 < 216 / (lab7.sum() + 216) < 0.25 and lab7[1:7, 1:7, 1:7].sum() == 0,
+      f"phantom label: {lab7.sum()} voxels")
+lab7[1:7, 1:7, 1:7] = 1
+nib.save(nib.Nifti1Image(lab7, lab1.affine), os.path.join(folder, "7.label.nii.gz"))
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "7.img.nii.gz"))
+
+
+def one_component(label):
+    """The 26-connected component of the label's first voxel (breadth-first)."""
+    todo = [tuple(np.argwhere(label)[0])]
+    seen = set(todo)
+    while todo:
+        i, j, k = todo.pop()
+        for d in np.ndindex(3, 3, 3):
+            n = (i + d[0] - 1, j + d[1] - 1, k + d[2] - 1)
+            if n not in seen and all(0 <= n[a] < label.shape[a] for a in range(3)) and label[n]:
+                seen.add(n)
+                todo.append(n)
+    out = np.zeros_like(label)
+    out[tuple(np.array(sorted(seen)).T)] = 1
+    return out
+
+
+lab8 = one_component(np.asarray(lab1.dataobj))
+check(0 < lab8.sum() < lab1.get_fdata().sum(), f"one tree of the phantom: {lab8.sum()} voxels")
+nib.save(nib.Nifti1Image(lab8, lab1.affine), os.path.join(folder, "8.label.nii.gz"))
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(folder, "8.img.nii.gz"))
 out = os.path.join(TMP, "folder_out")
-run(["--input", folder, "--out", out, "--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet"])
+folder_run = run(["--input", folder, "--out", out, "--rows", "96", "--cols", "96", "--pixel", "2.5",
+                  "--quiet"])
 m = json.load(open(os.path.join(out, "manifest.json")))
 status = {p["id"]: p for p in m["patients"]}
 check(status.get("1", {}).get("status") == "ok", f"patient 1: {status.get('1')}")
@@ -284,6 +341,96 @@ check("direction of axis 1" in status.get("4", {}).get("error", ""), f"patient 4
 check("not finite" in status.get("5", {}).get("error", ""), f"patient 5: {status.get('5')}")
 check("patient 6 label: empty coronary mask" in status.get("6", {}).get("error", ""),
       f"patient 6: {status.get('6')}")
+n7 = int(lab7.sum())
+check(f"warning: patient 7: {100 * 216 / n7:.1f}% of the label's voxels (216 of {n7}, in 1 of its "
+      "3 components)" in folder_run.stderr, f"patient 7 warning: {folder_run.stderr}")
+check(status.get("7", {}).get("status") == "ok" and
+      status["7"]["label"] == {"voxels": n7, "components": 3, "dropped_components": 1,
+                               "dropped_voxels": 216, "dropped_fraction": 216 / n7},
+      f"patient 7 (a third tree in its label): {status.get('7')}")
+check(json.load(open(os.path.join(out, "patients", "7", "done.json")))["label"] ==
+      status["7"]["label"], "patient 7: done.json records the dropped voxels")
+check("patient 1" not in folder_run.stderr, f"a clean label warns: {folder_run.stderr}")
+check("--allow-single-system" in status.get("8", {}).get("error", ""), f"patient 8: {status.get('8')}")
+
+# --allow-single-system: the single tree is made (the system it is assigned to), the other is
+# recorded as absent; the threshold of the dropped-voxel warning is a flag.
+single = os.path.join(TMP, "single_in")
+os.makedirs(single)
+for f in ["7.img.nii.gz", "7.label.nii.gz", "8.img.nii.gz", "8.label.nii.gz"]:
+    shutil.copy(os.path.join(folder, f), single)
+out = os.path.join(TMP, "single_out")
+proc = run(["--input", single, "--out", out, "--rows", "96", "--cols", "96", "--pixel", "2.5",
+            "--quiet", "--allow-single-system", "--warn-dropped", "0.25"])
+check("warning" not in proc.stderr, f"--warn-dropped 0.25, patient 7 at 18.5%: {proc.stderr}")
+m = json.load(open(os.path.join(out, "manifest.json")))
+status = {p["id"]: p for p in m["patients"]}
+rec = status.get("8", {})
+present = [name for name, sys in rec.get("systems", {}).items() if sys["present"]]
+check(rec.get("status") == "ok" and len(present) == 1 and m["parameters"]["allow_single_system"],
+      f"patient 8 with --allow-single-system: {rec}")
+if rec.get("status") == "ok" and len(present) == 1:
+    absent = "RCA" if present[0] == "LCA" else "LCA"
+    check(rec["systems"][absent] == {"present": False, "voxels": 0, "views": 0, "pairs": 0,
+                                     "centerline_mm": 0.0, "dense_labels": 0},
+          f"patient 8 absent system: {rec['systems'][absent]}")
+    p8 = os.path.join(out, "patients", "8")
+    prefixes = {f[:3] for d in ["views", "pairs"] for f in os.listdir(os.path.join(p8, d))}
+    n_views = len([f for f in os.listdir(os.path.join(p8, "views")) if f.endswith(".camera.json")])
+    check(prefixes == {present[0]} and n_views == rec["systems"][present[0]]["views"] > 0,
+          f"patient 8 files: {prefixes}, {n_views} views")
+check(status.get("7", {}).get("status") == "ok", f"patient 7 with --allow-single-system: {status.get('7')}")
+
+# ImageCAS as distributed: patients in sub-folders (and NIfTI with or without gzip) give the
+# same patients, with one split over all of them, as the same files in one folder.
+nested, flat = os.path.join(TMP, "nested_in"), os.path.join(TMP, "flat_in")
+for d in ["1-200", "201-400/more"]:
+    os.makedirs(os.path.join(nested, d))
+os.makedirs(flat)
+for src, dst in [("1.img.nii.gz", "1-200/1.img.nii.gz"), ("1.label.nii.gz", "1-200/1.label.nii.gz"),
+                 ("7.img.nii.gz", "201-400/7.img.nii.gz"), ("7.label.nii.gz", "201-400/7.label.nii.gz")]:
+    shutil.copy(os.path.join(folder, src), os.path.join(nested, dst))
+nib.save(nib.load(os.path.join(folder, "1.img.nii.gz")), os.path.join(nested, "201-400/more/9.img.nii"))
+nib.save(nib.load(os.path.join(folder, "1.label.nii.gz")), os.path.join(nested, "201-400/more/9.label.nii"))
+for d, _, files in os.walk(nested):
+    for f in files:
+        shutil.copy(os.path.join(d, f), flat)
+FOLDER = ["--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet"]
+run(["--input", nested, "--out", os.path.join(TMP, "nested_out")] + FOLDER)
+run(["--input", flat, "--out", os.path.join(TMP, "flat_out")] + FOLDER)
+m = json.load(open(os.path.join(TMP, "nested_out", "manifest.json")))
+check(sorted(p["id"] for p in m["patients"]) == ["1", "7", "9"] and
+      all(p["status"] == "ok" for p in m["patients"]), f"nested folder: {m['patients']}")
+check(sorted(p["split"] for p in m["patients"]) == ["test", "train", "val"],
+      f"one split over every sub-folder: {[(p['id'], p['split']) for p in m['patients']]}")
+for sub in ["patients", "splits"]:
+    same_tree(os.path.join(TMP, "flat_out", sub), os.path.join(TMP, "nested_out", sub),
+              f"nested input against flat input: {sub}")
+# The same id in two sub-folders is refused before any work, naming both files.
+shutil.copy(os.path.join(folder, "1.img.nii.gz"), os.path.join(nested, "201-400/more/1.img.nii.gz"))
+out = os.path.join(TMP, "duplicate_out")
+proc = run(["--input", nested, "--out", out] + FOLDER, ok=False)
+check("patient id '1'" in proc.stderr and os.path.join(nested, "1-200", "1.img.nii.gz") in proc.stderr
+      and os.path.join(nested, "201-400", "more", "1.img.nii.gz") in proc.stderr and
+      not os.path.exists(out), f"duplicate id: {proc.stderr}")
+# No patient at all: the folder and the patterns looked for.
+empty = os.path.join(TMP, "no_patients")
+os.makedirs(os.path.join(empty, "sub"))
+shutil.copy(os.path.join(folder, "1.label.nii.gz"), os.path.join(empty, "sub", "1.nii.gz"))
+proc = run(["--input", empty, "--out", os.path.join(TMP, "no_patients_out")] + FOLDER, ok=False)
+check(f"'{empty}'" in proc.stderr and "<id>.img.nii.gz with <id>.label.nii.gz" in proc.stderr and
+      "<id>.img.nii with <id>.label.nii" in proc.stderr, f"no patients: {proc.stderr}")
+
+# --export reference with an id the reference layout cannot name: refused before any work.
+bad_ids = os.path.join(TMP, "bad_ids")
+os.makedirs(bad_ids)
+for f in ["img", "label"]:
+    shutil.copy(os.path.join(folder, f"1.{f}.nii.gz"), os.path.join(bad_ids, f"1.{f}.nii.gz"))
+    shutil.copy(os.path.join(folder, f"1.{f}.nii.gz"), os.path.join(bad_ids, f"case_2.{f}.nii.gz"))
+out = os.path.join(TMP, "bad_ids_out")
+proc = run(["--input", bad_ids, "--out", out, "--export", "reference"] + FOLDER, ok=False)
+check("--export reference: patient id 'case_2'" in proc.stderr and "at '_'" in proc.stderr and
+      not os.path.exists(os.path.join(out, "patients")), f"--export with a bad id: {proc.stderr}")
 # A write that fails in the middle of a patient (views are written on a helper thread while the
 # next one renders): that patient is recorded with an error naming the file, the others are
 # made, nothing half-written is left, and a rerun once the obstacle is gone equals a full run.

@@ -39,7 +39,6 @@ const fs::path& gimm_dataset() {
       src.phantom_seed = static_cast<std::uint64_t>(seed);
       src.phantom_size = gimm::PhantomSize::small;
       json record = gimm::generate_patient(src, o, d);
-      record.erase("seconds");
       record["split"] = split;
       patients.push_back(record);
     }
@@ -304,4 +303,32 @@ TEST_CASE("Reference export: errors name the file and the bad value", "[pipeline
   gimm::write_json_file(dst / "pairs" / "RCA_00-01.json", pair);
   gimm::write_png(dst / "views" / "RCA_00.png", gimm::Image<std::uint16_t>(5, 7, 1));
   fails_with((dst / "views" / "RCA_00.png").string(), "5 x 7");
+}
+
+TEST_CASE("Reference export: ids are checked before anything is written", "[pipeline][reference]") {
+  namespace rf = gimm::reference_format;
+  CHECK_NOTHROW(rf::check_patient_ids({"7", "12", "phantom-0001"}, "--export reference"));
+  CHECK_THROWS_WITH(rf::check_patient_ids({"7", "a_b"}, "--export reference"),
+                    Catch::Contains("--export reference: patient id 'a_b'") &&
+                        Catch::Contains("splits names at '_'"));
+  CHECK_THROWS_WITH(rf::check_patient_ids({"7", "0007"}, "--export reference"),
+                    Catch::Contains("'7' and '0007' both export as '0007'"));
+
+  // A good patient listed before a bad one: nothing of the good one is written either.
+  const fs::path dataset = tmp_root() / "bad_id";
+  fs::remove_all(dataset);
+  fs::create_directories(dataset / "patients");
+  fs::copy(gimm_dataset() / "patients" / "7", dataset / "patients" / "7",
+           fs::copy_options::recursive);
+  gimm::write_json_file(dataset / "manifest.json",
+                        {{"format", "gimm-dataset/1"},
+                         {"patients",
+                          {{{"id", "7"}, {"split", "train"}, {"status", "ok"}},
+                           {{"id", "x_1"}, {"split", "test"}, {"status", "ok"}}}}});
+  const fs::path out = tmp_root() / "bad_id_out";
+  fs::remove_all(out);
+  CHECK_THROWS_WITH(
+      gimm::export_reference(dataset, out),
+      Catch::Contains("patient id 'x_1'") && Catch::Contains((dataset / "manifest.json").string()));
+  CHECK(!fs::exists(out / "images"));
 }

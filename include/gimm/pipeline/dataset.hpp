@@ -9,11 +9,12 @@
 ///   patients/<id>/views/<SYS>_<nn>.overlap.png 8-bit vessel passages per pixel (mesh mode)
 ///   patients/<id>/views/<SYS>_<nn>.camera.json camera, view class, angles
 ///   patients/<id>/pairs/<SYS>_<nn>-<mm>.json  pair labels (dense, sparse, F, view classes)
+///   patients/<id>/timings.json                seconds per stage (vary run to run)
 ///   patients/<id>/done.json                   the patient's record, written last
 ///   manifest.json (or manifest.shard-I-of-N.json), splits/{train,val,test}.txt
-/// Every file is written atomically and depends only on (parameters, seed, patient id), so a
-/// patient whose done.json exists is complete and is skipped on restart, and shards write
-/// disjoint patients whose union is byte-identical to one run.
+/// Every file but timings.json is written atomically and depends only on (parameters, seed,
+/// patient id), so a patient whose done.json exists is complete and is skipped on restart, and
+/// shards write disjoint patients whose union is byte-identical to one run (timings.json aside).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -23,6 +24,8 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "gimm/anatomy/attenuation.hpp"
@@ -34,8 +37,8 @@
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/centerlines_json.hpp"
 #include "gimm/io/files.hpp"
-#include "gimm/io/nifti.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/io/volume_file.hpp"
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
 #include "gimm/render/drr.hpp"
@@ -64,11 +67,20 @@ struct DatasetOptions {
   ViewMode view_mode = ViewMode::shared;
   CArm carm;  ///< detector, distances and model; angles come from the protocol
   ContrastPreset recipe = ContrastPreset::angiography;
+  /// Tissue beyond the scan's axial coverage (pad_axial, docs/recipes.md): 0 = air.
+  double pad_mm = kDefaultPadMm;
   Projector projector = Projector::siddon;
   VesselMode vessel_mode = VesselMode::voxel;
   std::size_t sparse_count = 20;
   double split_train = 0.70, split_val = 0.15;  ///< the rest is test
   double min_spur_mm = 3.0;
+  /// A label with one tree only: make the system it is assigned to (split_coronary_systems'
+  /// allow_single, by the volume centre) and record the other as absent, instead of failing.
+  bool allow_single_system = false;
+  /// Log a warning for a patient whose label loses more than this share of its voxels to specks
+  /// and components beyond the two largest. Only the log depends on it, so it is no parameter
+  /// of the files (not in to_json()).
+  double warn_dropped_fraction = 0.05;
 
   /// The detector and distances (angles and isocentre are set per view).
   nlohmann::json carm_settings() const {
@@ -84,11 +96,13 @@ struct DatasetOptions {
             {"view_mode", gimm::to_string(view_mode)},
             {"carm", carm_settings()},
             {"recipe", gimm::to_string(recipe)},
+            {"pad_mm", pad_mm},
             {"projector", gimm::to_string(projector)},
             {"vessel_mode", gimm::to_string(vessel_mode)},
             {"sparse_count", sparse_count},
             {"split", {split_train, split_val, 1 - split_train - split_val}},
             {"min_spur_mm", min_spur_mm},
+            {"allow_single_system", allow_single_system},
             {"gimm_version", GIMM_VERSION_STRING}};
   }
 };
@@ -102,26 +116,62 @@ struct PatientSource {
   std::string split = "train";  ///< train | val | test (assign_splits)
 };
 
-/// ImageCAS-style folder: every N.img.nii.gz with its N.label.nii.gz, sorted by id. A missing
-/// label is kept (the patient fails with a clear error in the manifest; the run goes on).
+/// The id of an ImageCAS-style image file, "<id>.img<ext>" with <ext> any ending gimm reads
+/// (volume_extensions()), or empty when `file` is not one.
+inline std::string imagecas_image_id(const std::filesystem::path& file) {
+  const std::string name = file.filename().string(), ext = volume_extension(file), tag = ".img";
+  if (ext.empty() || name.size() <= ext.size() + tag.size()) return {};
+  const std::string stem = name.substr(0, name.size() - ext.size());
+  if (stem.compare(stem.size() - tag.size(), tag.size(), tag) != 0) return {};
+  return stem.substr(0, stem.size() - tag.size());
+}
+
+/// The file-name patterns scan_imagecas_folder looks for, for messages.
+inline std::string imagecas_patterns() {
+  std::string out;
+  for (const auto& ext : volume_extensions())
+    out += (out.empty() ? "" : ", ") + ("<id>.img" + ext) + " with <id>.label" + ext;
+  return out;
+}
+
+/// ImageCAS-style folder with its sub-folders (ImageCAS ships 1-200/, 201-400/, ...): every
+/// <id>.img<ext> (imagecas_image_id) with its label <id>.label<ext> in the same folder, sorted
+/// by id. Hidden files and folders (name starting with '.') are skipped. A missing label is kept
+/// (the patient fails with a clear error in the manifest; the run goes on); an id found twice is
+/// an error naming both files, as each id is one patients/<id>/ folder.
 inline std::vector<PatientSource> scan_imagecas_folder(const std::filesystem::path& dir) {
-  GIMM_CHECK_AS(IoError, std::filesystem::is_directory(dir),
+  namespace fs = std::filesystem;
+  GIMM_CHECK_AS(IoError, fs::is_directory(dir),
                 "input folder '" << dir.string() << "' does not exist");
   std::vector<PatientSource> out;
-  const std::string suffix = ".img.nii.gz";
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-    const std::string name = entry.path().filename().string();
-    if (name.size() <= suffix.size() ||
-        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
+       ++it) {
+    const fs::path& path = it->path();
+    if (path.filename().string().rfind('.', 0) == 0) {
+      if (it->is_directory()) it.disable_recursion_pending();
       continue;
+    }
+    const std::string id = imagecas_image_id(path);
+    if (id.empty() || !it->is_regular_file()) continue;
     PatientSource p;
-    p.id = name.substr(0, name.size() - suffix.size());
-    p.image = entry.path();
-    p.label = dir / (p.id + ".label.nii.gz");
-    out.push_back(p);
+    p.id = id;
+    p.image = path;
+    p.label = path.parent_path() / (id + ".label" + volume_extension(path));
+    out.push_back(std::move(p));
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
-  GIMM_CHECK(!out.empty(), "input folder '" << dir.string() << "' holds no *.img.nii.gz");
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.id, a.image) < std::tie(b.id, b.image);
+  });
+  for (std::size_t k = 1; k < out.size(); ++k)
+    GIMM_CHECK(out[k].id != out[k - 1].id,
+               "input folder '" << dir.string() << "': patient id '" << out[k].id
+                                << "' is there twice, as '" << out[k - 1].image.string()
+                                << "' and '" << out[k].image.string()
+                                << "'; ids must be unique (one patients/<id>/ folder each)");
+  GIMM_CHECK(!out.empty(), "input folder '" << dir.string()
+                                            << "' (sub-folders included) holds no patient: looked "
+                                               "for "
+                                            << imagecas_patterns());
   return out;
 }
 
@@ -241,15 +291,129 @@ inline std::vector<ProjectedPoint> write_view(
   write_json_file(file(".points.json"), view_points_json(points, view), -1);
   return view;
 }
+
+/// What the LCA/RCA split kept of the label: every component, and the voxels and components left
+/// in neither system (specks, trees beyond the two largest). Deterministic, so part of the
+/// record.
+inline nlohmann::json label_json(const CoronarySplit& split) {
+  const int kept = (split.lca_voxels > 0 ? 1 : 0) + (split.rca_voxels > 0 ? 1 : 0);
+  return {{"voxels", split.label_voxels},
+          {"components", split.components},
+          {"dropped_components", split.components - kept},
+          {"dropped_voxels", split.dropped_voxels},
+          {"dropped_fraction", split.dropped_fraction()}};
+}
+
+/// Seconds since the last lap (or since construction).
+class Stopwatch {
+ public:
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return seconds;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
 }  // namespace detail
 
+/// Wall-clock seconds of one patient's stages (summed over both systems). They vary run to run,
+/// so they go to the log and patients/<id>/timings.json, never to done.json or the manifest.
+struct PatientTimings {
+  double read = 0;         ///< CT and label files (or building the phantom), grid check
+  double split = 0;        ///< connected components, LCA/RCA split
+  double centerlines = 0;  ///< distance transform, thinning, pruning
+  double attenuation = 0;  ///< HU -> attenuation, vessel box, empty-space blocks
+  double mesh = 0;         ///< vessel surface and lumen gain (mesh mode)
+  double views = 0;        ///< view loops: renders, masks, waiting for the view files
+  double pairs = 0;        ///< pair labels
+  double writes = 0;       ///< view files (helper thread, during views), pair files, centerlines
+  double total = 0;        ///< the whole patient; less than the sum, as writes overlap views
+  std::size_t view_count = 0;
+
+  /// (stage, seconds) in pipeline order.
+  std::vector<std::pair<const char*, double>> stages() const {
+    return {{"read", read},
+            {"split", split},
+            {"centerlines", centerlines},
+            {"attenuation", attenuation},
+            {"mesh", mesh},
+            {"views", views},
+            {"pairs", pairs},
+            {"writes", writes}};
+  }
+
+  PatientTimings& operator+=(const PatientTimings& o) {
+    read += o.read;
+    split += o.split;
+    centerlines += o.centerlines;
+    attenuation += o.attenuation;
+    mesh += o.mesh;
+    views += o.views;
+    pairs += o.pairs;
+    writes += o.writes;
+    total += o.total;
+    view_count += o.view_count;
+    return *this;
+  }
+
+  nlohmann::json to_json() const {
+    nlohmann::json seconds = {{"total", total}};
+    for (const auto& [stage, s] : stages()) seconds[stage] = s;
+    return {{"seconds", seconds},
+            {"views", view_count},
+            {"seconds_per_view", view_count ? views / static_cast<double>(view_count) : 0.0}};
+  }
+
+  /// "12.30 s: read 1.20, split 0.30, ..." for the log.
+  std::string summary() const {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.2f s:", total);
+    std::string out = buf;
+    for (const auto& [stage, s] : stages()) {
+      std::snprintf(buf, sizeof buf, " %s %.2f,", stage, s);
+      out += buf;
+    }
+    out.pop_back();
+    if (view_count) {
+      std::snprintf(buf, sizeof buf, " (%zu views, %.3f s per view)", view_count,
+                    views / static_cast<double>(view_count));
+      out += buf;
+    }
+    return out;
+  }
+};
+
+/// The log's warning for a patient record whose label lost more than o.warn_dropped_fraction of
+/// its voxels in the split, or empty.
+inline std::string dropped_voxels_warning(const nlohmann::json& record, const DatasetOptions& o) {
+  const nlohmann::json label = record.value("label", nlohmann::json::object());
+  const double fraction = label.value("dropped_fraction", 0.0);
+  if (!(fraction > o.warn_dropped_fraction)) return {};
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "patient %s: %.1f%% of the label's voxels (%lld of %lld, in %d of its %d "
+                "components) are in neither LCA nor RCA and are not rendered: the split keeps "
+                "the two largest components (warning threshold %g%%)",
+                record.value("id", std::string("?")).c_str(), 100 * fraction,
+                label.value("dropped_voxels", 0LL), label.value("voxels", 0LL),
+                label.value("dropped_components", 0), label.value("components", 0),
+                100 * o.warn_dropped_fraction);
+  return buf;
+}
+
 /// Generates one patient into out/patients/<id>/ and returns its record (also written as
-/// done.json, last, without the timings "seconds" and "view_seconds"). Throws on bad input; the
-/// caller records the error.
+/// done.json, last, with "run" added). The stage timings go to patients/<id>/timings.json and
+/// to `timings` when given. Throws on bad input; the caller records the error.
 inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
-                                       const std::filesystem::path& out) {
+                                       const std::filesystem::path& out,
+                                       PatientTimings* timings = nullptr) {
   namespace fs = std::filesystem;
-  const auto t0 = std::chrono::steady_clock::now();
+  PatientTimings t;
+  detail::Stopwatch whole;
+  detail::Stopwatch stage;
   Volume<float> hu;
   Volume<std::uint8_t> label;
   if (src.phantom_seed) {
@@ -262,25 +426,38 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   } else {
     GIMM_CHECK_AS(IoError, fs::exists(src.label),
                   "patient " << src.id << ": label '" << src.label.string() << "' is missing");
-    hu = read_nifti<float>(src.image);
-    label = read_nifti<std::uint8_t>(src.label);
+    hu = read_volume<float>(src.image);
+    label = read_volume<std::uint8_t>(src.label);
     const std::string difference = grid_difference(hu.geometry(), label.geometry());
     GIMM_CHECK(difference.empty(),
                "patient " << src.id << ": image and label grids disagree: " << difference);
   }
-  const auto split = split_coronary_systems(label, {}, "patient " + src.id + " label");
+  t.read = stage.lap();
+  SplitOptions split_options;
+  split_options.allow_single = o.allow_single_system;
+  const auto split = split_coronary_systems(label, split_options, "patient " + src.id + " label");
+  t.split = stage.lap();
   const fs::path dir = out / "patients" / src.id;
   fs::create_directories(dir / "views");
   fs::create_directories(dir / "pairs");
 
   Rng rng = Rng(o.seed).fork(stable_hash(src.id));
-  nlohmann::json record = {
-      {"id", src.id}, {"split", src.split}, {"systems", nlohmann::json::object()}};
+  nlohmann::json record = {{"id", src.id},
+                           {"split", src.split},
+                           {"label", detail::label_json(split)},
+                           {"systems", nlohmann::json::object()}};
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
-  double view_seconds = 0;  // the view loops: renders, masks and the writes they wait for
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
     const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
+    const std::int64_t voxels = system == CoronarySystem::LCA ? split.lca_voxels : split.rca_voxels;
+    if (voxels == 0) {  // a single-tree label (allow_single_system): no views, no pairs
+      record["systems"][to_string(system)] = {{"present", false},     {"voxels", 0},
+                                              {"views", 0},           {"pairs", 0},
+                                              {"centerline_mm", 0.0}, {"dense_labels", 0}};
+      continue;
+    }
+    stage.lap();
     SkeletonOptions so;
     so.system = system;
     so.min_spur_mm = o.min_spur_mm;
@@ -292,17 +469,20 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     }
     // Branch indices in the labels refer to centerlines.json (both systems).
     const auto points = flatten_centerlines(all, system);
+    t.centerlines += stage.lap();
     ContrastRecipe recipe;
     recipe.preset = o.recipe;
     const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
     const Volume<float> mu =
         make_attenuation(hu, mesh_mode ? nullptr : &mask, recipe, "patient " + src.id);
+    const AxialPads<float> pads = axial_pads(mu, o.pad_mm);
     // The voxel mask projects through its bounding box only (a few % of the CT grid), as 0/1
     // floats with its empty blocks found once for all views.
     const Volume<float> vessel_box =
         mesh_mode ? Volume<float>() : unit_mask(crop_to_foreground(mask, 1));
     const EmptyBlocks vessel_blocks = mesh_mode ? EmptyBlocks() : EmptyBlocks(vessel_box);
     const EmptyBlocks mu_blocks(mu);
+    t.attenuation += stage.lap();
     std::optional<VesselMeshProjector> mesh_projector;
     double lumen_gain = 0;  // mm^-1 the lumen adds over the (uninjected) background, mesh mode
     if (mesh_mode) {
@@ -317,6 +497,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
         }
       lumen_gain = count ? (injected - plain) / count : 0.0;
     }
+    t.mesh += stage.lap();
     const ViewPlan plan = plan_views(system, o.view_mode, rng);
     const Eigen::Vector3d centre = [&] {
       Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -328,8 +509,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     std::vector<std::string> names;
     // A view's outputs (exp and 16-bit PNG, labels, mask PNG, JSON: serial work) are written on
     // a helper thread while the next view renders on every core; one view in flight at a time.
-    // Declared after everything the task reads, so an exception here waits for it first.
-    const auto views_start = std::chrono::steady_clock::now();
+    // Declared after everything the task reads, so an exception here waits for it first. The
+    // task adds its time to t.writes: tasks run one after another, each started after get()
+    // returned the previous one, so they never touch it at once.
     std::future<std::vector<ProjectedPoint>> in_flight;
     const auto collect = [&] {
       if (in_flight.valid()) projected.push_back(in_flight.get());
@@ -344,7 +526,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       DrrOptions drr;
       drr.projector = o.projector;
       drr.empty_blocks = &mu_blocks;
-      Image<float> integrals = render_line_integrals(mu, camera, drr);
+      Image<float> integrals = render_line_integrals(mu, pads, camera, drr);
       Image<std::uint8_t> vessel, overlap;
       if (mesh_mode) {
         const VesselProjection vp = mesh_projector->project(camera);
@@ -363,44 +545,58 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       cj["system"] = to_string(system);
       collect();
       in_flight =
-          std::async(std::launch::async,
-                     [&, integrals = std::move(integrals), vessel = std::move(vessel),
-                      overlap = std::move(overlap), cj = std::move(cj), camera, name]() mutable {
-                       return detail::write_view(dir / "views" / name, integrals, std::move(vessel),
-                                                 mesh_mode ? &overlap : nullptr, cj, camera, points,
-                                                 mesh_mode ? &*mesh_projector : nullptr);
-                     });
+          std::async(std::launch::async, [&, integrals = std::move(integrals),
+                                          vessel = std::move(vessel), overlap = std::move(overlap),
+                                          cj = std::move(cj), camera, name]() mutable {
+            detail::Stopwatch writing;
+            auto view = detail::write_view(dir / "views" / name, integrals, std::move(vessel),
+                                           mesh_mode ? &overlap : nullptr, cj, camera, points,
+                                           mesh_mode ? &*mesh_projector : nullptr);
+            t.writes += writing.lap();
+            return view;
+          });
       cameras.push_back(camera);
       names.push_back(name);
     }
     collect();
-    view_seconds +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - views_start).count();
+    t.views += stage.lap();
+    t.view_count += plan.views.size();
     std::size_t dense_total = 0;
     for (const auto& pr : plan.pairs) {
       const PairLabels labels = label_pair(points, projected[pr.a], projected[pr.b], cameras[pr.a],
                                            cameras[pr.b], o.sparse_count, rng);
       dense_total += labels.dense.size();
+      t.pairs += stage.lap();
       const std::string name = names[pr.a] + "-" + names[pr.b].substr(4);
       write_json_file(
           dir / "pairs" / (name + ".json"),
           detail::pair_json(labels, plan.views[pr.a], plan.views[pr.b], names[pr.a], names[pr.b]),
           -1);
+      t.writes += stage.lap();
     }
-    record["systems"][to_string(system)] = {{"views", plan.views.size()},
+    record["systems"][to_string(system)] = {{"present", true},
+                                            {"voxels", voxels},
+                                            {"views", plan.views.size()},
                                             {"pairs", plan.pairs.size()},
                                             {"centerline_mm", tree.length()},
                                             {"dense_labels", dense_total}};
   }
+  stage.lap();
   write_json_file(dir / "centerlines.json", to_json(all), -1);
+  t.writes += stage.lap();
   record["status"] = "ok";
-  record["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  record["view_seconds"] = view_seconds;
+  t.total = whole.lap();
+  // Before done.json, which is written last: a finished patient always has its timings.
+  nlohmann::json timing_file = t.to_json();
+  timing_file["id"] = src.id;
+  timing_file["note"] =
+      "wall-clock seconds of the run that made this patient; they vary run to "
+      "run (docs/dataset.md)";
+  write_json_file(dir / "timings.json", timing_file);
   nlohmann::json stored = record;
-  stored.erase("seconds");  // timing varies run to run; done.json must not
-  stored.erase("view_seconds");
   stored["run"] = patient_run(src, o);
   write_json_file(dir / "done.json", stored);
+  if (timings) *timings = t;
   return record;
 }
 

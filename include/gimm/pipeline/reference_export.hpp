@@ -79,6 +79,19 @@ inline std::string patient_token(const std::string& id, const std::string& where
   return id;
 }
 
+/// Checks every patient id up front: each must make a token (patient_token) and no two the same
+/// token ("7" and "0007"). gimm-dataset calls it before rendering anything, export_reference
+/// before writing anything. `where` names the source in the error.
+inline void check_patient_ids(const std::vector<std::string>& ids, const std::string& where) {
+  std::map<std::string, std::string> owner;  // token -> id
+  for (const auto& id : ids) {
+    const std::string token = patient_token(id, where);
+    const auto [first, fresh] = owner.emplace(token, id);
+    GIMM_CHECK(fresh, where << ": patients '" << first->second << "' and '" << id
+                            << "' both export as '" << token << "'");
+  }
+}
+
 /// "AP Cranial" -> "AP_Cranial" (file names); dense-label keys keep the space.
 inline std::string underscored(std::string name) {
   std::replace(name.begin(), name.end(), ' ', '_');
@@ -256,15 +269,14 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   GIMM_CHECK_AS(FormatError, patients.is_array(),
                 mwhere << ": 'patients' must be an array, got " << patients.type_name());
 
-  for (const char* sub : {"images", "masks", "npz_scenes", "dense_labels"})
-    fs::create_directories(out_dir / sub);
-
   json frames = json::array();
   json spacing = json::object();
   std::map<std::string, std::vector<std::string>> lists{{"train", {}}, {"val", {}}, {"test", {}}};
-  std::map<std::string, std::string> token_owner;  // token -> gimm id (collisions)
   std::size_t total_pairs = 0, scenes = 0;
 
+  // Every record's id and split first: a bad one fails before any file is written.
+  std::vector<const json*> ok;
+  std::vector<std::string> ids;
   for (const json& record : patients) {
     const std::string status = record.is_object() ? record.value("status", "") : "";
     if (status != "ok") continue;
@@ -273,10 +285,19 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
     const std::string split = detail::ref_string(record, "split", pwhere);
     GIMM_CHECK_AS(FormatError, lists.count(split),
                   pwhere << ": 'split' must be train, val or test, got '" << split << "'");
+    ok.push_back(&record);
+    ids.push_back(id);
+  }
+  rf::check_patient_ids(ids, mwhere);
+  for (const char* sub : {"images", "masks", "npz_scenes", "dense_labels"})
+    fs::create_directories(out_dir / sub);
+
+  for (const json* r : ok) {
+    const json& record = *r;
+    const std::string id = record["id"].get<std::string>();
+    const std::string pwhere = mwhere + " (patient '" + id + "')";
+    const std::string split = record["split"].get<std::string>();
     const std::string token = rf::patient_token(id, pwhere);
-    const auto [owner, fresh] = token_owner.emplace(token, id);
-    GIMM_CHECK(fresh, mwhere << ": patients '" << owner->second << "' and '" << id
-                             << "' both export as '" << token << "'");
 
     const fs::path pdir = dataset_dir / "patients" / id;
     const fs::path pairs_dir = pdir / "pairs";
