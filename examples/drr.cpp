@@ -1,5 +1,5 @@
 // gimm-drr: renders a DRR (simulated angiogram) of a CT volume under one C-arm view.
-//   gimm-drr --volume CT.nii.gz [--label L.nii.gz --system LCA|RCA]
+//   gimm-drr --volume CT.nii.gz|.nrrd|.mha [--label L.nii.gz --system LCA|RCA]
 //            [--recipe reference|angiography|none] --primary DEG --secondary DEG
 //            [camera flags of gimm-carm] [--projector siddon|trilinear] [--step MM] --out PREFIX
 // Writes PREFIX.png (16-bit Beer-Lambert intensity, min-max normalised per image),
@@ -18,9 +18,9 @@
 #include "gimm/anatomy/components.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
-#include "gimm/io/nifti.hpp"
 #include "gimm/io/npy.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/io/volume_file.hpp"
 #include "gimm/labels/views.hpp"
 #include "gimm/render/drr.hpp"
 
@@ -49,17 +49,25 @@ int main(int argc, char** argv) {
   flags.add(app, carm, true);
   std::string volume_path, label_path, system_name, recipe_name = "angiography",
                                                     projector_name = "siddon", out_prefix;
-  double step_mm = 0.0;
+  double step_mm = 0.0, pad_mm = gimm::kDefaultPadMm;
   bool quiet = false;
-  app.add_option("--volume", volume_path, "CT volume (HU), NIfTI .nii or .nii.gz")
+  // ExistingPath, not ExistingFile: a DICOM folder gets read_volume's advice on converting it.
+  app.add_option("--volume", volume_path,
+                 "CT volume (HU): NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr or MetaImage .mha/.mhd")
       ->required()
-      ->check(CLI::ExistingFile);
-  app.add_option("--label", label_path, "coronary label (0/1), NIfTI, same grid as the volume")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingPath);
+  app.add_option("--label", label_path,
+                 "coronary label (0/1), same formats, same grid as the volume")
+      ->check(CLI::ExistingPath);
   app.add_option("--system", system_name, "injected system: LCA|RCA (with --label)")
       ->check(CLI::IsMember({"LCA", "RCA"}));
   app.add_option("--recipe", recipe_name, "contrast recipe: reference|angiography|none")
       ->check(CLI::IsMember({"reference", "angiography", "none"}))
+      ->capture_default_str();
+  app.add_option("--pad-mm", pad_mm,
+                 "tissue beyond the scan's axial coverage, mm on each side (copies of the edge "
+                 "slices; 0 = air, as the reference)")
+      ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
   app.add_option("--projector", projector_name, "siddon (exact) | trilinear")
       ->check(CLI::IsMember({"siddon", "trilinear"}))
@@ -84,10 +92,10 @@ int main(int argc, char** argv) {
     options.projector = gimm::parse_projector(projector_name);
     options.step_mm = step_mm;
 
-    gimm::Volume<float> ct = gimm::read_nifti<float>(volume_path);
+    gimm::Volume<float> ct = gimm::read_volume<float>(volume_path);
     std::optional<gimm::Volume<std::uint8_t>> injected;
     if (!label_path.empty()) {
-      const auto label = gimm::read_nifti<std::uint8_t>(label_path);
+      const auto label = gimm::read_volume<std::uint8_t>(label_path);
       GIMM_CHECK(label.dims() == ct.dims(),
                  "gimm-drr: label '" << label_path << "' grid " << label.nx() << "x" << label.ny()
                                      << "x" << label.nz() << " differs from the volume grid "
@@ -110,9 +118,11 @@ int main(int argc, char** argv) {
         recipe.preset == gimm::ContrastPreset::none
             ? std::move(ct)
             : gimm::make_attenuation(ct, injected ? &*injected : nullptr, recipe, volume_path);
+    const gimm::AxialPads<float> pads = gimm::axial_pads(mu, pad_mm);
     const auto t_loaded = std::chrono::steady_clock::now();
     const gimm::Camerad camera = carm.camera();
-    const gimm::Image<float> line_integrals = gimm::render_line_integrals(mu, camera, options);
+    const gimm::Image<float> line_integrals =
+        gimm::render_line_integrals(mu, pads, camera, options);
     const auto t_rendered = std::chrono::steady_clock::now();
 
     nlohmann::json camera_json = gimm::to_json(carm);
@@ -121,6 +131,7 @@ int main(int argc, char** argv) {
                           {"system", system_name},
                           {"recipe", recipe_name},
                           {"projector", projector_name},
+                          {"pad_mm", pad_mm},
                           {"step_mm", options.step_mm},
                           {"mu_water_per_mm", recipe.mu_water},
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},

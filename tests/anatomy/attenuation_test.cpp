@@ -125,38 +125,3 @@ TEST_CASE("Dense tissue: the phantom has both cases and the recipe handles them"
     CHECK(cortex_bone >= 0.99 * cortex);
   }
 }
-
-TEST_CASE("Axial padding: copies of the edge slices, the world grid kept", "[anatomy][recipe]") {
-  for (const bool flipped : {false, true}) {
-    VolumeGeometry g;
-    g.dims = {3, 4, 5};
-    g.spacing = Eigen::Vector3d(0.7, 0.8, 2.0);
-    g.origin = Eigen::Vector3d(1, 2, 3);
-    // Stored with the slices along j (a sagittal-first file) and z pointing down when flipped.
-    g.direction << 1, 0, 0, 0, 0, 1, 0, flipped ? -1 : 1, 0;
-    Volume<float> v(g);
-    for (std::size_t n = 0; n < v.size(); ++n) v.data()[n] = static_cast<float>(n);
-    REQUIRE(axial_axis(g) == 1);
-    const Volume<float> p = pad_axial(v, 1.7);  // ceil(1.7 / 0.8) = 3 slices each side
-    REQUIRE(p.ny() == 4 + 6);
-    REQUIRE(p.nx() == 3);
-    REQUIRE(p.nz() == 5);
-    for (int k = 0; k < 5; ++k)
-      for (int j = 0; j < p.ny(); ++j)
-        for (int i = 0; i < 3; ++i) {
-          const int src = std::clamp(j - 3, 0, 3);
-          REQUIRE(p(i, j, k) == v(i, src, k));
-          // Voxels of the original keep their world position.
-          if (j >= 3 && j < 7)
-            REQUIRE((p.index_to_world(Eigen::Vector3d(i, j, k)) -
-                     v.index_to_world(Eigen::Vector3d(i, j - 3, k)))
-                        .norm() < 1e-12);
-        }
-  }
-  VolumeGeometry g;
-  g.dims = {2, 2, 2};
-  const Volume<float> v(g, 1.0f);
-  CHECK(pad_axial(v, 0.0).nz() == 2);
-  CHECK_THROWS_WITH(pad_axial(v, -1.0), Catch::Contains("-1"));
-  CHECK_THROWS_WITH(pad_axial(v, std::nan("")), Catch::Contains("nan"));
-}

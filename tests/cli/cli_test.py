@@ -136,4 +136,25 @@ for form in ["qform", "sform"]:
               f"{form} marker at view ({primary},{secondary}): image max at (u={u}, v={v}), "
               f"camera projects it to {uv}")
 
+# The reported crash (SIGSEGV in the exact traversal): a chest CT's grid stored RAS first,
+# 0.9765625 x 0.9765625 x 2 mm, gimm-drr's defaults (AP, isocentre at the volume centre); rays
+# leave through voxel edges on the grid's boundary. Every recipe, with and without padding.
+slab = np.full((512, 512, 20), -1000, np.int16)
+slab[:, 136:491, :] = 40
+slab_affine = np.diag([-0.9765625, -0.9765625, 2.0, 1.0])
+slab_affine[:3, 3] = [249.51171875, 437.51171875, -804.5]
+slab_img = nib.Nifti1Image(slab, slab_affine)
+slab_img.set_sform(slab_affine, code=1)
+slab_img.set_qform(slab_affine, code=1)
+slab_path = os.path.join(TMP, "slab.nii.gz")
+nib.save(slab_img, slab_path)
+for recipe in ["angiography", "reference"]:
+    for pad in [0, 80]:
+        o = os.path.join(TMP, f"slab_{recipe}_{pad}")
+        run("gimm-drr", "--volume", slab_path, "--recipe", recipe, "--pad-mm", pad, "--primary", 0,
+            "--secondary", 0, "--out", o, "--quiet")
+        integrals = np.load(o + ".npy")
+        check(np.isfinite(integrals).all() and integrals.max() > 0,
+              f"slab DRR ({recipe}, pad {pad}) must be finite and see the slab")
+
 h.finish("cli_test")

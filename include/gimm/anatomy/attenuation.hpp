@@ -212,39 +212,4 @@ Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injecte
   return mu;
 }
 
-/// The index axis that runs head-foot: the one whose direction is closest to world z.
-inline int axial_axis(const VolumeGeometry& g) {
-  int best = 0;
-  for (int a = 1; a < 3; ++a)
-    if (std::abs(g.direction(2, a)) > std::abs(g.direction(2, best))) best = a;
-  return best;
-}
-
-/// The patient beyond the scan's axial coverage, for rays that pass above or below it: a CCTA
-/// covers the heart (ImageCAS: 128 mm) while the detector sees ~190 mm, and rays that miss the
-/// volume would otherwise meet air and turn the image's top and bottom white. Pads the axial
-/// axis by `pad_mm` on both sides with copies of the first and last slices (tissue, spine and
-/// ribs carry on); docs/recipes.md. pad_mm = 0 returns the volume unchanged.
-template <class T>
-Volume<T> pad_axial(const Volume<T>& volume, double pad_mm) {
-  GIMM_CHECK(std::isfinite(pad_mm) && pad_mm >= 0 && pad_mm <= 1000,
-             "pad_axial: padding must be in [0, 1000] mm, got " << pad_mm);
-  VolumeGeometry g = volume.geometry();
-  const int axis = axial_axis(g);
-  const int pad = static_cast<int>(std::ceil(pad_mm / g.spacing[axis] - 1e-9));
-  if (pad == 0) return volume;
-  g.dims[axis] += 2 * pad;
-  g.origin -= g.direction.col(axis) * (g.spacing[axis] * pad);
-  Volume<T> out(g);
-  const int n_axis = volume.geometry().dims[axis];
-  for (int k = 0; k < out.nz(); ++k)
-    for (int j = 0; j < out.ny(); ++j)
-      for (int i = 0; i < out.nx(); ++i) {
-        int idx[3] = {i, j, k};
-        idx[axis] = std::clamp(idx[axis] - pad, 0, n_axis - 1);
-        out(i, j, k) = volume(idx[0], idx[1], idx[2]);
-      }
-  return out;
-}
-
 }  // namespace gimm

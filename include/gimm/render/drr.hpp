@@ -14,6 +14,7 @@
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/volume.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/render/axial_pad.hpp"
 #include "gimm/render/empty_space.hpp"
 #include "gimm/render/ray_volume.hpp"
 #include "gimm/render/siddon.hpp"
@@ -110,6 +111,23 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
       line[col] = static_cast<float>(sum);
     }
   });
+  return out;
+}
+
+/// Line integrals through `mu` and its axial pads (axial_pad.hpp: the patient beyond the scan),
+/// which adjoin it without overlap, so the sums are the integrals through the padded volume.
+/// `options.empty_blocks`, if given, belongs to `mu`; the pads build their own.
+template <class T>
+Image<float> render_line_integrals(const Volume<T>& mu, const AxialPads<T>& pads,
+                                   const Camerad& camera, const DrrOptions& options = {}) {
+  Image<float> out = render_line_integrals(mu, camera, options);
+  if (pads.empty()) return out;
+  DrrOptions pad_options = options;
+  pad_options.empty_blocks = nullptr;
+  for (const Volume<T>* pad : {&pads.below, &pads.above}) {
+    const Image<float> more = render_line_integrals(*pad, camera, pad_options);
+    for (std::size_t p = 0; p < out.size(); ++p) out.data()[p] += more.data()[p];
+  }
   return out;
 }
 
