@@ -21,6 +21,9 @@ runs=${3:-10}
 mkdir -p "$out"
 export OMP_NUM_THREADS=2
 py=/usr/bin/python3
+# docs/performance.md's figures are for binaries built for this CPU (-DGIMM_ARCH=native).
+grep -qs '^GIMM_ARCH:STRING=native$' "$build/CMakeCache.txt" ||
+  echo "note: $build is not built with -DGIMM_ARCH=native; figures will not match docs/performance.md" >&2
 gimm_drr="$build/examples/gimm-drr"
 [ -x "$gimm_drr" ] || { echo "error: $gimm_drr not built" >&2; exit 1; }
 for tool in plastimatch hyperfine; do

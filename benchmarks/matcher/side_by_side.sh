@@ -23,6 +23,9 @@ runs=${3:-10}
 mkdir -p "$out/pairs" "$out/dump"
 export OMP_NUM_THREADS=2
 py=/usr/bin/python3
+# docs/performance.md's figures are for binaries built for this CPU (-DGIMM_ARCH=native).
+grep -qs '^GIMM_ARCH:STRING=native$' "$build/CMakeCache.txt" ||
+  echo "note: $build is not built with -DGIMM_ARCH=native; figures will not match docs/performance.md" >&2
 bench="$build/benchmarks/gimm_matcher_bench"
 for tool in "$bench" "$build/examples/gimm-phantom" "$build/examples/gimm-drr"; do
   [ -x "$tool" ] || { echo "error: $tool not built" >&2; exit 1; }
