@@ -41,7 +41,7 @@ Scene make_scene() {
   for (int k = 10; k < 12; ++k)
     for (int j = 34; j < 36; ++j)
       for (int i = 24; i < 26; ++i) s.hu(i, j, k) = 900;  // calcification
-  // An injected lumen next to the vein: excluded from the dense tissue.
+  // An injected lumen: dense tissue too, but the recipe makes it iodine whatever its class.
   for (int k = 0; k < 24; ++k) s.injected(20, 30, k) = 1, s.hu(20, 30, k) = 400;
   return s;
 }
@@ -51,7 +51,7 @@ Scene make_scene() {
 TEST_CASE("Dense tissue: a dense vein is blood, trabecular bone is bone", "[anatomy][recipe]") {
   const Scene s = make_scene();
   const ContrastRecipe recipe;
-  const DenseTissue d = classify_dense_tissue(s.hu, &s.injected, recipe);
+  const DenseTissue d = classify_dense_tissue(s.hu, recipe);
   auto cls = [&](int i, int j, int k) { return static_cast<Dense>(d.classes(i, j, k)); };
   CHECK(cls(12, 20, 0) == Dense::blood);      // 1100 HU contrast, at the grid's bottom face
   CHECK(cls(12, 20, 12) == Dense::blood);     // and inside
@@ -61,10 +61,10 @@ TEST_CASE("Dense tissue: a dense vein is blood, trabecular bone is bone", "[anat
   CHECK(cls(38, 20, 12) == Dense::none);      // the canal
   CHECK(cls(54, 6, 12) == Dense::blood);      // a thin vessel at 320 HU
   CHECK(cls(24, 34, 10) == Dense::bone);      // calcium: too small for an inside, 900 HU
-  CHECK(cls(20, 30, 5) == Dense::none);       // the injected lumen
+  CHECK(cls(20, 30, 5) == Dense::blood);      // the injected lumen: the recipe overrides it
   CHECK(cls(2, 2, 2) == Dense::none);         // soft tissue
   CHECK(d.bone_components == 2);
-  CHECK(d.blood_components == 2);
+  CHECK(d.blood_components == 3);  // the vein, the thin vessel, the lumen
 
   // What that means for attenuation: the vein loses its contrast, the vertebra keeps all of
   // its physical attenuation, trabecular bone included.
@@ -73,6 +73,8 @@ TEST_CASE("Dense tissue: a dense vein is blood, trabecular bone is bone", "[anat
   CHECK(mu(38, 24, 12) == Approx(recipe.bone_weight * hu_to_mu(240)));
   CHECK(mu(38, 28, 12) == Approx(recipe.bone_weight * hu_to_mu(1150)));
   CHECK(mu(20, 30, 5) == Approx(hu_to_mu(recipe.lumen_hu)));
+  // A classification made once (for both systems of a patient) gives the same volume.
+  CHECK(make_attenuation(s.hu, &s.injected, recipe, "scene", &d).storage() == mu.storage());
   // The per-voxel rule gets both wrong, which is why it is no longer used for volumes.
   CHECK(recipe.mu(1100, false) == Approx(hu_to_mu(1100)));
   CHECK(recipe.mu(240, false) == Approx(recipe.soft_weight * hu_to_mu(recipe.native_blood_hu)));
@@ -88,7 +90,7 @@ TEST_CASE("Dense tissue: a vessel cut by the scan's coverage is not a bone shell
   for (int k = 6; k < 10; ++k)
     for (int j = 0; j < 20; ++j)
       for (int i = 0; i < 20; ++i) hu(i, j, k) = k == 6 ? 500.0f : 1000.0f;
-  const DenseTissue d = classify_dense_tissue<std::uint8_t>(hu, nullptr, ContrastRecipe{});
+  const DenseTissue d = classify_dense_tissue(hu, ContrastRecipe{});
   CHECK(static_cast<Dense>(d.classes(10, 10, 9)) == Dense::blood);
   CHECK(d.bone_components == 0);
 }
@@ -102,7 +104,7 @@ TEST_CASE("Dense tissue: the phantom has both cases and the recipe handles them"
     const Phantom p = make_phantom(po);
     const detail::TissueHu tissue(Rng(seed).fork(0x7155e));
     const Volume<float> hu = volume_cast<float>(p.hu);
-    const DenseTissue d = classify_dense_tissue(hu, &p.label, ContrastRecipe{});
+    const DenseTissue d = classify_dense_tissue(hu, ContrastRecipe{});
     std::int64_t svc = 0, svc_blood = 0, trabecular = 0, trabecular_bone = 0, cortex = 0,
                  cortex_bone = 0;
     for (std::size_t v = 0; v < hu.size(); ++v) {

@@ -123,7 +123,7 @@ struct ContrastRecipe {
   }
 };
 
-/// The dense tissue of a CCTA (HU >= blood_pool_lo_hu, outside the injected lumen), told apart
+/// The dense tissue of a CCTA (HU >= blood_pool_lo_hu), told apart
 /// by structure: per 26-connected component, bone when its surface (voxels with a face
 /// neighbour inside the grid below blood_pool_lo_hu) is brighter than its inside by
 /// bone_shell_margin_hu - a cortex around trabecular bone or marrow - and blood otherwise: a
@@ -131,21 +131,18 @@ struct ContrastRecipe {
 /// however dense its contrast. The grid's own faces are not surface: a vessel cut by the scan's
 /// coverage stays blood. Components too thin to have an inside go by their mean HU (bone_hu).
 /// Limitation: a blood pool fused to bone at >= blood_pool_lo_hu forms one component and is
-/// classified as one (docs/recipes.md).
+/// classified as one (docs/recipes.md). The injected lumen is not excluded (the recipe
+/// overrides it), so one classification serves both coronary systems of a patient.
 struct DenseTissue {
   Volume<std::uint8_t> classes;  ///< ContrastRecipe::Dense per voxel
   int blood_components = 0, bone_components = 0;
   std::int64_t blood_voxels = 0, bone_voxels = 0;
 };
 
-template <class T>
-DenseTissue classify_dense_tissue(const Volume<float>& hu, const Volume<T>* injected,
-                                  const ContrastRecipe& recipe) {
+inline DenseTissue classify_dense_tissue(const Volume<float>& hu, const ContrastRecipe& recipe) {
   const auto n = static_cast<std::int64_t>(hu.size());
   Volume<std::uint8_t> dense(hu.geometry(), 0);
-  for (std::int64_t v = 0; v < n; ++v)
-    dense.data()[v] =
-        hu.data()[v] >= recipe.blood_pool_lo_hu && !(injected && injected->data()[v] != T(0));
+  for (std::int64_t v = 0; v < n; ++v) dense.data()[v] = hu.data()[v] >= recipe.blood_pool_lo_hu;
   const Components comps = connected_components(dense);
   // Mean HU of each component's surface and inside.
   const int count = comps.count();
@@ -182,10 +179,13 @@ DenseTissue classify_dense_tissue(const Volume<float>& hu, const Volume<T>* inje
 }
 
 /// The attenuation volume (mm^-1) of `hu` under `recipe`, with `injected` (same grid, nonzero =
-/// injected lumen) or no injection when null. NaN HU is an error naming the voxel.
+/// injected lumen) or no injection when null. NaN HU is an error naming the voxel. The
+/// angiography preset classifies the dense tissue itself unless `dense` (classify_dense_tissue
+/// of the same `hu` and recipe) is given, e.g. once for both systems of a patient.
 template <class T>
 Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injected,
-                               const ContrastRecipe& recipe, const std::string& name = "volume") {
+                               const ContrastRecipe& recipe, const std::string& name = "volume",
+                               const DenseTissue* dense = nullptr) {
   if (injected) {
     GIMM_CHECK(injected->dims() == hu.dims(), name << ": label grid " << injected->nx() << "x"
                                                    << injected->ny() << "x" << injected->nz()
@@ -199,13 +199,17 @@ Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injecte
   for (std::int64_t v = 0; v < n; ++v)  // before the structure: NaN would fall out of it
     GIMM_CHECK(std::isfinite(in[v]), name << ": HU at voxel " << v << " is not finite");
   const bool structure = recipe.preset == ContrastPreset::angiography;
-  const DenseTissue dense = structure ? classify_dense_tissue(hu, injected, recipe) : DenseTissue{};
+  GIMM_CHECK(!dense || dense->classes.dims() == hu.dims(),
+             name << ": the dense-tissue classes were made for another grid than " << hu.nx() << "x"
+                  << hu.ny() << "x" << hu.nz());
+  const DenseTissue own = structure && !dense ? classify_dense_tissue(hu, recipe) : DenseTissue{};
+  const std::uint8_t* classes = structure ? (dense ? *dense : own).classes.data() : nullptr;
   parallel_for(
       0, n,
       [&](std::int64_t v) {
         const bool inj = injected && injected->data()[v] != T(0);
-        const auto cls = structure ? static_cast<ContrastRecipe::Dense>(dense.classes.data()[v])
-                                   : ContrastRecipe::Dense::none;
+        const auto cls =
+            classes ? static_cast<ContrastRecipe::Dense>(classes[v]) : ContrastRecipe::Dense::none;
         out[v] = static_cast<float>(recipe.mu(in[v], inj, cls));
       },
       1 << 16);

@@ -447,6 +447,12 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                            {"label", detail::label_json(split)},
                            {"systems", nlohmann::json::object()}};
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
+  // Bone or contrast (the angiography recipe's structure), found once for both systems.
+  ContrastRecipe recipe;
+  recipe.preset = o.recipe;
+  std::optional<DenseTissue> dense;
+  if (recipe.preset == ContrastPreset::angiography) dense = classify_dense_tissue(hu, recipe);
+  t.attenuation += stage.lap();
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
     const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
@@ -470,11 +476,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     // Branch indices in the labels refer to centerlines.json (both systems).
     const auto points = flatten_centerlines(all, system);
     t.centerlines += stage.lap();
-    ContrastRecipe recipe;
-    recipe.preset = o.recipe;
     const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
-    const Volume<float> mu =
-        make_attenuation(hu, mesh_mode ? nullptr : &mask, recipe, "patient " + src.id);
+    const Volume<float> mu = make_attenuation(hu, mesh_mode ? nullptr : &mask, recipe,
+                                              "patient " + src.id, dense ? &*dense : nullptr);
     const AxialPads<float> pads = axial_pads(mu, o.pad_mm);
     // The voxel mask projects through its bounding box only (a few % of the CT grid), as 0/1
     // floats with its empty blocks found once for all views.
