@@ -14,6 +14,7 @@
 #include "gimm/core/rng.hpp"
 #include "gimm/core/volume.hpp"
 #include "gimm/render/ray_volume.hpp"
+#include "gimm/render/siddon.hpp"
 
 namespace gimm::test {
 
@@ -169,18 +170,7 @@ std::pair<double, double> siddon_integral_bounds(const Volume<T>& volume, const 
   const glm::dvec3 o = ray.origin + 0.5;
   const glm::dvec3& d = ray.direction;
   const int n[3] = {volume.nx(), volume.ny(), volume.nz()};
-  double s_enter, s_exit;
-  if (!clip_to_box({o, d}, glm::dvec3(0.0), glm::dvec3(n[0], n[1], n[2]), 0.0, s_enter, s_exit))
-    return {0.0, 0.0};
-  std::vector<double> s_all = {s_enter, s_exit};
-  for (int a = 0; a < 3; ++a) {
-    if (d[a] == 0) continue;
-    for (int plane = 0; plane <= n[a]; ++plane) {
-      const double s = (plane - o[a]) / d[a];
-      if (s > s_enter && s < s_exit) s_all.push_back(s);
-    }
-  }
-  std::sort(s_all.begin(), s_all.end());
+  const std::vector<double> s_all = detail::sorted_crossings(volume, ray, 0.0);
   double lo = 0.0, hi = 0.0;
   for (std::size_t m = 0; m + 1 < s_all.size(); ++m) {
     const double length = s_all[m + 1] - s_all[m];

@@ -154,15 +154,17 @@ void siddon_integral_pair(const Volume<T>& volume, const IndexRay& ray0, const I
   out1 = b.sum;
 }
 
-/// Siddon (1985): the slow reference path (see the file comment).
+namespace detail {
+/// Siddon's parameters: the entry and exit of `ray` (index space, from s_min) and every voxel
+/// plane it crosses in between, sorted; empty when it misses.
 template <class T>
-double siddon_integral_reference(const Volume<T>& volume, const IndexRay& ray, double s_min = 0.0) {
+std::vector<double> sorted_crossings(const Volume<T>& volume, const IndexRay& ray, double s_min) {
   const glm::dvec3 o = ray.origin + 0.5;
   const glm::dvec3& d = ray.direction;
   const int n[3] = {volume.nx(), volume.ny(), volume.nz()};
   double s_enter, s_exit;
   if (!clip_to_box({o, d}, glm::dvec3(0.0), glm::dvec3(n[0], n[1], n[2]), s_min, s_enter, s_exit))
-    return 0.0;
+    return {};
   std::vector<double> s_all = {s_enter, s_exit};
   for (int a = 0; a < 3; ++a) {
     if (d[a] == 0) continue;
@@ -172,6 +174,17 @@ double siddon_integral_reference(const Volume<T>& volume, const IndexRay& ray, d
     }
   }
   std::sort(s_all.begin(), s_all.end());
+  return s_all;
+}
+}  // namespace detail
+
+/// Siddon (1985): the slow reference path (see the file comment).
+template <class T>
+double siddon_integral_reference(const Volume<T>& volume, const IndexRay& ray, double s_min = 0.0) {
+  const glm::dvec3 o = ray.origin + 0.5;
+  const glm::dvec3& d = ray.direction;
+  const int n[3] = {volume.nx(), volume.ny(), volume.nz()};
+  const std::vector<double> s_all = detail::sorted_crossings(volume, ray, s_min);
   double sum = 0.0;
   for (std::size_t m = 0; m + 1 < s_all.size(); ++m) {
     const double length = s_all[m + 1] - s_all[m];
