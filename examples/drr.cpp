@@ -118,6 +118,7 @@ int main(int argc, char** argv) {
         recipe.preset == gimm::ContrastPreset::none
             ? std::move(ct)
             : gimm::make_attenuation(ct, injected ? &*injected : nullptr, recipe, volume_path);
+    if (recipe.preset == gimm::ContrastPreset::none) gimm::check_attenuation(mu, volume_path);
     const gimm::AxialPads<float> pads = gimm::axial_pads(mu, pad_mm);
     const auto t_loaded = std::chrono::steady_clock::now();
     const gimm::Camerad camera = carm.camera();

@@ -156,5 +156,9 @@ for recipe in ["angiography", "reference"]:
         integrals = np.load(o + ".npy")
         check(np.isfinite(integrals).all() and integrals.max() > 0,
               f"slab DRR ({recipe}, pad {pad}) must be finite and see the slab")
+# The same CT in HU read as attenuation (--recipe none): -1000 in air is refused, by name.
+run("gimm-drr", "--volume", slab_path, "--recipe", "none", "--primary", 0, "--secondary", 0,
+    "--out", os.path.join(TMP, "slab_none"), ok=False, contains="slab.nii.gz")
+check(not os.path.exists(os.path.join(TMP, "slab_none.png")), "a refused volume writes nothing")
 
 h.finish("cli_test")

@@ -123,6 +123,15 @@ struct ContrastRecipe {
   }
 };
 
+/// Checks that `mu` can be attenuation (mm^-1): finite and >= 0 everywhere. A CT in HU read as
+/// attenuation (-1000 in air) would otherwise give exp(+large) intensities and no error.
+inline void check_attenuation(const Volume<float>& mu, const std::string& name) {
+  for (std::size_t v = 0; v < mu.size(); ++v)
+    GIMM_CHECK(std::isfinite(mu.data()[v]) && mu.data()[v] >= 0,
+               name << ": attenuation must be finite and >= 0 mm^-1, got " << mu.data()[v]
+                    << " at voxel " << v << " (a CT in HU needs a contrast recipe)");
+}
+
 /// The dense tissue of a CCTA (HU >= blood_pool_lo_hu), told apart
 /// by structure: per 26-connected component, bone when its surface (voxels with a face
 /// neighbour inside the grid below blood_pool_lo_hu) is brighter than its inside by
