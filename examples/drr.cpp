@@ -23,6 +23,7 @@
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/views.hpp"
 #include "gimm/render/drr.hpp"
+#include "gimm/render/padded_attenuation.hpp"
 
 namespace {
 
@@ -114,12 +115,14 @@ int main(int argc, char** argv) {
     }
     flags.finish(carm);
     // --recipe none: the volume already is attenuation; move it rather than copy 4 bytes/voxel.
-    const gimm::Volume<float> mu =
+    if (recipe.preset == gimm::ContrastPreset::none) gimm::check_attenuation(ct, volume_path);
+    const gimm::PaddedAttenuation padded =
         recipe.preset == gimm::ContrastPreset::none
-            ? std::move(ct)
-            : gimm::make_attenuation(ct, injected ? &*injected : nullptr, recipe, volume_path);
-    if (recipe.preset == gimm::ContrastPreset::none) gimm::check_attenuation(mu, volume_path);
-    const gimm::AxialPads<float> pads = gimm::axial_pads(mu, pad_mm);
+            ? gimm::padded_attenuation(std::move(ct), pad_mm, options.projector)
+            : gimm::padded_attenuation(ct, injected ? &*injected : nullptr, recipe, pad_mm,
+                                       options.projector, volume_path);
+    const gimm::Volume<float>& mu = padded.mu;
+    const gimm::AxialPads<float>& pads = padded.pads;
     const auto t_loaded = std::chrono::steady_clock::now();
     const gimm::Camerad camera = carm.camera();
     const gimm::Image<float> line_integrals =

@@ -6,6 +6,7 @@
 #include "gimm/core/rng.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/render/drr.hpp"
+#include "gimm/render/padded_attenuation.hpp"
 
 using namespace gimm;
 
@@ -112,4 +113,109 @@ TEST_CASE("Axial padding: the thick slabs integrate like the padded volume", "[r
         }
       CHECK(only_pads > 0);
     }
+}
+
+TEST_CASE("Axial padding: a ray in the plane where scan and pad meet is counted once",
+          "[render][pad][drr]") {
+  // 0.75 mm voxels centred on the origin and an orthographic AP view with 0.75 mm pixels at the
+  // isocentre (1 mm at the detector, magnification 4/3) and an odd row count: rows 4 pixels
+  // either side of the centre lie exactly in the scan's axial faces, the planes it shares with
+  // its pads. The closed grid counted those rows in the scan and in a pad (twice the tissue);
+  // the half-open rule counts them once, like the thin copies of pad_axial, where the same
+  // plane is an interior face.
+  VolumeGeometry g;
+  g.dims = {8, 8, 8};
+  g.spacing = Eigen::Vector3d::Constant(0.75);
+  g.origin = Eigen::Vector3d::Constant(-3.5 * 0.75);
+  Volume<float> mu(g);
+  Rng rng(31);
+  for (auto& x : mu.storage()) x = static_cast<float>(rng.uniform(0.01, 0.03));
+  CArm carm;
+  carm.rows = carm.cols = 17;
+  carm.pixel_mm = 1.0;
+  carm.model = ProjectionModel::orthographic;
+  const Camerad camera = carm.camera();
+  const Image<float> slow = render_line_integrals(pad_axial(mu, 3.0), camera);  // 4 slices
+  const Image<float> fast = render_line_integrals(mu, axial_pads(mu, 3.0), camera);
+  int on_shared_plane = 0;
+  for (int v = 0; v < camera.rows(); ++v) {
+    const IndexRay r = to_index_ray(g, camera.ray(8.0, double(v)));
+    on_shared_plane += r.direction.z == 0.0 && (r.origin.z == -0.5 || r.origin.z == 7.5);
+    for (int u = 0; u < camera.cols(); ++u) REQUIRE(fast(v, u) == Approx(slow(v, u)).epsilon(1e-6));
+  }
+  CHECK(on_shared_plane == 2);  // the case is really exercised (exact arithmetic above)
+}
+
+TEST_CASE("Axial padding: the trilinear projector gets the padded volume, not thick slabs",
+          "[render][pad][drr][trilinear]") {
+  // A uniform volume: the rows through the pads must see the tissue per millimetre they see in
+  // the scan, with either projector (a thick slab's trilinear field fades over half its 60 mm).
+  VolumeGeometry g;
+  g.dims = {20, 20, 10};
+  g.spacing = Eigen::Vector3d(2, 2, 4);
+  g.origin = Eigen::Vector3d(-19, -19, -18);
+  const Volume<float> hu(g, 40.0f);
+  ContrastRecipe recipe;
+  recipe.preset = ContrastPreset::none;
+  CArm carm;
+  carm.rows = 64;
+  carm.cols = 8;
+  carm.pixel_mm = 3.0;
+  carm.model = ProjectionModel::orthographic;
+  const Camerad camera = carm.camera();
+  for (const Projector projector : {Projector::siddon, Projector::trilinear}) {
+    const PaddedAttenuation p =
+        padded_attenuation<std::uint8_t>(hu, nullptr, recipe, 60.0, projector);
+    CHECK(p.pads.empty() == (projector == Projector::trilinear));
+    DrrOptions options;
+    options.projector = projector;
+    const Image<float> image = render_line_integrals(p.mu, p.pads, camera, options);
+    const double expected = 40.0 * hu_to_mu(40.0);  // 40 mm through the tissue, AP
+    for (const int v : {2, 10, 32, 54, 61}) CHECK(image(v, 4) == Approx(expected).epsilon(0.03));
+  }
+  DrrOptions trilinear;
+  trilinear.projector = Projector::trilinear;
+  const Volume<float> mu(g, 0.02f);
+  CHECK_THROWS_WITH(render_line_integrals(mu, axial_pads(mu, 60.0), camera, trilinear),
+                    Catch::Contains("siddon projector only"));
+}
+
+TEST_CASE("Axial padding: the injected lumen does not carry on into the pads",
+          "[render][pad][attenuation]") {
+  // A coronary cut by the scan's last slice: the slices beyond it are tissue, not contrast.
+  VolumeGeometry g;
+  g.dims = {6, 6, 4};
+  Volume<float> hu(g, 40.0f);
+  Volume<std::uint8_t> lumen(g, 0);
+  for (int k = 0; k < 4; ++k) {
+    lumen(2, 2, k) = 1;  // through the whole scan, both edge slices included
+    hu(2, 2, k) = 400.0f;
+  }
+  for (const auto preset : {ContrastPreset::angiography, ContrastPreset::reference}) {
+    ContrastRecipe recipe;
+    recipe.preset = preset;
+    const Volume<std::uint8_t>* none = nullptr;
+    const Volume<float> plain = make_attenuation(hu, none, recipe);
+    const Volume<float> injected = make_attenuation(hu, &lumen, recipe);
+    REQUIRE(injected(2, 2, 3) > 2 * plain(2, 2, 3));
+    const PaddedAttenuation s = padded_attenuation(hu, &lumen, recipe, 5.0, Projector::siddon);
+    CHECK(s.mu(2, 2, 3) == injected(2, 2, 3));
+    CHECK(s.pads.above(2, 2, 0) == plain(2, 2, 3));
+    CHECK(s.pads.below(2, 2, 0) == plain(2, 2, 0));
+    CHECK(s.pads.above(0, 0, 0) == plain(0, 0, 3));
+    const PaddedAttenuation t = padded_attenuation(hu, &lumen, recipe, 5.0, Projector::trilinear);
+    REQUIRE(t.mu.nz() == 4 + 2 * 5);
+    CHECK(t.mu(2, 2, 5 + 3) == injected(2, 2, 3));
+    CHECK(t.mu(2, 2, 13) == plain(2, 2, 3));
+    CHECK(t.mu(2, 2, 0) == plain(2, 2, 0));
+  }
+}
+
+TEST_CASE("Axial padding: padding too thin to be a voxel is refused", "[render][pad]") {
+  VolumeGeometry g;
+  g.dims = {2, 2, 2};
+  const Volume<float> v(g, 1.0f);
+  CHECK_THROWS_WITH(axial_pads(v, 1e-320), Catch::Contains("0 or in [0.01, 1000] mm"));
+  CHECK_THROWS_WITH(pad_axial(v, 0.001), Catch::Contains("0.001"));
+  CHECK_NOTHROW(axial_pads(v, kMinPadMm));
 }

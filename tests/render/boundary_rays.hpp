@@ -148,7 +148,7 @@ inline double index_box_chord(const IndexRay& r, const Eigen::Vector3i& dims) {
   for (int a = 0; a < 3; ++a) {
     const double o = r.origin[a] + 0.5, hi = dims[a];
     if (r.direction[a] == 0.0) {
-      if (o < 0.0 || o > hi) return 0.0;
+      if (o < 0.0 || o >= hi) return 0.0;  // half-open: the high face has no voxel
       continue;
     }
     const double t0 = (0.0 - o) / r.direction[a], t1 = (hi - o) / r.direction[a];

@@ -1,6 +1,7 @@
 // Exact radiological path: analytic chords, fast (Jacobs) vs slow (Siddon) path, edge cases.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 
 #include "gimm/core/rng.hpp"
 #include "gimm/render/siddon.hpp"
@@ -143,6 +144,18 @@ TEST_CASE("Siddon: edge cases", "[render][siddon]") {
   SECTION("a ray that misses returns 0") {
     const auto r = to_index_ray(g, world_ray({-50, 50, 3}, {1, 0, 0}));
     CHECK(integral(v, r, 0.0) == 0.0);
+  }
+  SECTION("a ray with a NaN or infinite coordinate misses (clip_to_box refuses it)") {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double inf = std::numeric_limits<double>::infinity();
+    for (const IndexRay& r :
+         {IndexRay{{nan, 3.0, 3.0}, {1.0, 0.0, 0.0}}, IndexRay{{-4.0, 3.0, 3.0}, {1.0, nan, 0.0}},
+          IndexRay{{-4.0, 3.0, 3.0}, {1.0, 0.0, inf}},
+          IndexRay{{3.0, 3.0, -inf}, {0.0, 0.0, 1.0}}}) {
+      double s0, s1;
+      CHECK_FALSE(clip_to_box(r, glm::dvec3(0.0), glm::dvec3(8.0), 0.0, s0, s1));
+      CHECK(integral(v, r, 0.0) == 0.0);
+    }
   }
   SECTION("a ray pointing away from the volume returns 0 (integration starts at the source)") {
     const auto r = to_index_ray(g, world_ray({-20, 3.2, 3.3}, {-1, 0, 0}));

@@ -42,6 +42,7 @@
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
 #include "gimm/render/drr.hpp"
+#include "gimm/render/padded_attenuation.hpp"
 #include "gimm/render/vessel_mesh_projector.hpp"
 #include "gimm/version.hpp"
 
@@ -67,7 +68,7 @@ struct DatasetOptions {
   ViewMode view_mode = ViewMode::shared;
   CArm carm;  ///< detector, distances and model; angles come from the protocol
   ContrastPreset recipe = ContrastPreset::angiography;
-  /// Tissue beyond the scan's axial coverage (pad_axial, docs/recipes.md): 0 = air.
+  /// Tissue beyond the scan's axial coverage (padded_attenuation.hpp, docs/recipes.md): 0 = air.
   double pad_mm = kDefaultPadMm;
   Projector projector = Projector::siddon;
   VesselMode vessel_mode = VesselMode::voxel;
@@ -477,9 +478,11 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     const auto points = flatten_centerlines(all, system);
     t.centerlines += stage.lap();
     const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
-    const Volume<float> mu = make_attenuation(hu, mesh_mode ? nullptr : &mask, recipe,
-                                              "patient " + src.id, dense ? &*dense : nullptr);
-    const AxialPads<float> pads = axial_pads(mu, o.pad_mm);
+    const PaddedAttenuation padded =
+        padded_attenuation(hu, mesh_mode ? nullptr : &mask, recipe, o.pad_mm, o.projector,
+                           "patient " + src.id, dense ? &*dense : nullptr);
+    const Volume<float>& mu = padded.mu;
+    const AxialPads<float>& pads = padded.pads;
     // The voxel mask projects through its bounding box only (a few % of the CT grid), as 0/1
     // floats with its empty blocks found once for all views.
     const Volume<float> vessel_box =
@@ -493,10 +496,13 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       mesh_projector.emplace(mesh_from_mask(mask));
       double injected = 0, plain = 0;
       std::size_t count = 0;
+      // With the classes the attenuation used (a lumen voxel's "plain" value is blood, not bone).
       for (std::size_t n = 0; n < mask.size(); ++n)
         if (mask.data()[n]) {
-          injected += recipe.mu(hu.data()[n], true);
-          plain += recipe.mu(hu.data()[n], false);
+          const auto cls = dense ? static_cast<ContrastRecipe::Dense>(dense->classes.data()[n])
+                                 : ContrastRecipe::Dense::none;
+          injected += recipe.mu(hu.data()[n], true, cls);
+          plain += recipe.mu(hu.data()[n], false, cls);
           ++count;
         }
       lumen_gain = count ? (injected - plain) / count : 0.0;

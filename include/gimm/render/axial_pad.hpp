@@ -7,12 +7,14 @@
 ///
 /// - pad_axial: the padded volume itself (copies of the edge slices): the reference path.
 /// - AxialPads: the same padding as two one-voxel slabs `pad_mm` thick beside the volume. The
-///   padding is constant along the axis, and the voxel model is constant within a voxel, so one
-///   thick voxel integrates exactly like many thin copies, at the cost of one slice instead of
-///   pad_mm / spacing of them. render_line_integrals(mu, pads, ...) in drr.hpp adds them.
+///   padding is constant along the axis, and Siddon's voxel model is constant within a voxel, so
+///   one thick voxel integrates exactly like many thin copies, at the cost of one slice instead
+///   of pad_mm / spacing of them. render_line_integrals(mu, pads, ...) in drr.hpp adds them; the
+///   plane where scan and pad meet belongs to one of them (clip_to_box's half-open rule).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/volume.hpp"
@@ -32,10 +34,14 @@ inline int axial_axis(const VolumeGeometry& g) {
   return best;
 }
 
+/// The thinnest padding accepted (other than 0, none): a pad is one voxel of pad_mm, and a
+/// denormal-thin voxel would make the traversal's 1 / spacing infinite.
+inline constexpr double kMinPadMm = 0.01;
+
 namespace detail {
 inline void check_pad(double pad_mm) {
-  GIMM_CHECK(std::isfinite(pad_mm) && pad_mm >= 0 && pad_mm <= 1000,
-             "axial padding must be in [0, 1000] mm, got " << pad_mm);
+  GIMM_CHECK(pad_mm == 0 || (std::isfinite(pad_mm) && pad_mm >= kMinPadMm && pad_mm <= 1000),
+             "axial padding must be 0 or in [" << kMinPadMm << ", 1000] mm, got " << pad_mm);
 }
 
 /// `count` voxels of `spacing` along the axial `axis`, the first centred `first_centre_mm` from
@@ -59,11 +65,11 @@ Volume<T> slices_like(const Volume<T>& volume, int axis, int count, double spaci
 }
 }  // namespace detail
 
-/// `volume` with `pad_mm` more on both axial sides, as copies of its first and last slices
-/// (whole voxels: the pad is rounded up to a multiple of the slice spacing). pad_mm = 0 returns
-/// the volume unchanged.
+/// `volume` with `pad_mm` more on both axial sides, as copies of its first and last slices or,
+/// given `fill`, that value (a label that must not carry on). Whole voxels: the pad is rounded up
+/// to a multiple of the slice spacing, unlike axial_pads. pad_mm = 0 returns the volume unchanged.
 template <class T>
-Volume<T> pad_axial(Volume<T> volume, double pad_mm) {
+Volume<T> pad_axial(Volume<T> volume, double pad_mm, std::optional<T> fill = std::nullopt) {
   detail::check_pad(pad_mm);
   VolumeGeometry g = volume.geometry();
   const int axis = axial_axis(g);
@@ -77,14 +83,17 @@ Volume<T> pad_axial(Volume<T> volume, double pad_mm) {
     for (int j = 0; j < out.ny(); ++j)
       for (int i = 0; i < out.nx(); ++i) {
         int idx[3] = {i, j, k};
-        idx[axis] = std::clamp(idx[axis] - pad, 0, n_axis - 1);
-        out(i, j, k) = volume(idx[0], idx[1], idx[2]);
+        const int source = idx[axis] - pad;
+        idx[axis] = std::clamp(source, 0, n_axis - 1);
+        out(i, j, k) = fill && source != idx[axis] ? *fill : volume(idx[0], idx[1], idx[2]);
       }
   return out;
 }
 
-/// The padding of pad_axial as two slabs, one voxel of `pad_mm` along the axial axis each,
-/// adjoining the volume's first and last slices without overlap.
+/// The padding of pad_axial as two slabs, one voxel of `pad_mm` (exactly) along the axial axis
+/// each, adjoining the volume's first and last slices without overlap. Only the exact projector
+/// integrates them like the padded volume: the trilinear field of a one-voxel slab fades over
+/// half its thickness (padded_attenuation.hpp picks the form per projector).
 template <class T>
 struct AxialPads {
   Volume<T> below, above;

@@ -116,10 +116,15 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
 
 /// Line integrals through `mu` and its axial pads (axial_pad.hpp: the patient beyond the scan),
 /// which adjoin it without overlap, so the sums are the integrals through the padded volume.
-/// `options.empty_blocks`, if given, belongs to `mu`; the pads build their own.
+/// Exact projector only (a thick slab is not the trilinear field of thin copies: pad_axial the
+/// volume instead, as padded_attenuation.hpp does). `options.empty_blocks`, if given, belongs to
+/// `mu`; the pads build their own.
 template <class T>
 Image<float> render_line_integrals(const Volume<T>& mu, const AxialPads<T>& pads,
                                    const Camerad& camera, const DrrOptions& options = {}) {
+  GIMM_CHECK(pads.empty() || options.projector == Projector::siddon,
+             "axial pads are integrated exactly by the siddon projector only, not by "
+                 << to_string(options.projector) << " (pad the volume itself with pad_axial)");
   Image<float> out = render_line_integrals(mu, camera, options);
   if (pads.empty()) return out;
   DrrOptions pad_options = options;

@@ -47,18 +47,22 @@ inline IndexRay to_index_ray(const VolumeGeometry& geometry, const Ray<double>& 
 
 /// Parameter interval [s_enter, s_exit] where the ray lies in the box lo <= p <= hi, restricted
 /// to s >= s_min. Returns false on a miss (including grazing a box of zero thickness). An axis
-/// the ray runs parallel to constrains nothing if the origin lies within the slab, and makes a
-/// miss otherwise. A zero direction is a point, not a ray: a miss (its "chord" would be
-/// unbounded).
+/// the ray runs parallel to constrains nothing if the origin lies in the half-open slab
+/// lo <= o < hi, and makes a miss otherwise: a ray lying in the plane where two boxes meet
+/// (a scan and its axial pad, axial_pad.hpp) belongs to the upper one only, as a ray in a face
+/// between two voxels takes the voxel on its [i, i+1) side. A zero direction is a point, not a
+/// ray, and a non-finite origin or direction is no ray at all: both miss.
 inline bool clip_to_box(const IndexRay& ray, const glm::dvec3& lo, const glm::dvec3& hi,
                         double s_min, double& s_enter, double& s_exit) {
   s_enter = s_min;
   s_exit = std::numeric_limits<double>::infinity();
   if (ray.direction == glm::dvec3(0.0)) return false;
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(ray.origin[a]) || !std::isfinite(ray.direction[a])) return false;
   for (int a = 0; a < 3; ++a) {
     const double o = ray.origin[a], d = ray.direction[a];
     if (d == 0.0) {
-      if (o < lo[a] || o > hi[a]) return false;
+      if (!(o >= lo[a] && o < hi[a])) return false;
       continue;
     }
     double s0 = (lo[a] - o) / d, s1 = (hi[a] - o) / d;
