@@ -38,10 +38,16 @@ DEFAULT_CONFIG = {
     "threshold": 0.2,                  # coarse confidence threshold
     "border": 1,                       # coarse cells dropped at each image border
     "window": 5,                       # fine window (odd)
+    "anchor": True,                    # refine the A-side point inside its window too
 }
+
+# Keys a weights file written before they existed may lack, with the value that reproduces it.
+BACKWARD_DEFAULTS = {"anchor": False}
 
 
 def validate_config(cfg):
+    for key, value in BACKWARD_DEFAULTS.items():
+        cfg.setdefault(key, value)
     for key in DEFAULT_CONFIG:
         if key not in cfg:
             raise ValueError(f"matcher config: missing key '{key}'")
@@ -201,17 +207,31 @@ def border_mask(h, w, border):
     return keep.reshape(-1)
 
 
-def extract_windows(fine, rows, cols, window, stride):
-    """fine [C, Hf, Wf]; windows centred on fine pixels (stride*r, stride*c), zero padded.
-
-    Returns [M, window*window, C], window pixels in row-major order."""
+def extract_windows(fine, batch, rows, cols, window, stride):
+    """fine [N, C, Hf, Wf]; windows of image `batch` centred on fine pixels (stride*r, stride*c),
+    zero padded. Returns [M, window*window, C], window pixels in row-major order."""
     half = window // 2
     padded = F.pad(fine, (half, half, half, half))
     offsets = torch.arange(window)
     ry = (rows * stride)[:, None] + offsets[None, :]          # [M, W] rows in padded coords
     cx = (cols * stride)[:, None] + offsets[None, :]          # [M, W]
-    win = padded[:, ry[:, :, None], cx[:, None, :]]           # [C, M, W, W]
-    return win.permute(1, 2, 3, 0).reshape(rows.shape[0], window * window, fine.shape[0])
+    win = padded[batch[:, None, None], :, ry[:, :, None], cx[:, None, :]]  # [M, W, W, C]
+    return win.reshape(rows.shape[0], window * window, fine.shape[1])
+
+
+def window_grid(window):
+    """Normalised window offsets in [-1, 1], row-major: (gx, gy), each [window*window]."""
+    grid = torch.linspace(-1.0, 1.0, window)
+    gy, gx = torch.meshgrid(grid, grid, indexing="ij")
+    return gx.reshape(-1), gy.reshape(-1)
+
+
+def expectation(heat, gx, gy):
+    """Soft-argmax of heat [M, R] over the window grid: (ex, ey, std), normalised units."""
+    ex = (heat * gx).sum(1)
+    ey = (heat * gy).sum(1)
+    var = (heat * gx * gx).sum(1) - ex ** 2 + (heat * gy * gy).sum(1) - ey ** 2
+    return ex, ey, torch.sqrt(torch.clamp(var, min=1e-10))
 
 
 class GimmMatcher(nn.Module):
@@ -225,53 +245,77 @@ class GimmMatcher(nn.Module):
         self.down_proj = nn.Linear(w3, w1)
         self.merge_feat = nn.Linear(2 * w1, w1)
         self.fine = Transformer(w1, self.cfg["fine_heads"], self.cfg["fine_layers"])
+        # The A-side anchor: a score per A-window pixel; its soft-argmax is the A point (on the
+        # vessel, not the cell centre) and its weighted feature queries B's window.
+        self.anchor = nn.Linear(w1, 1) if self.cfg["anchor"] else None
 
-    def forward(self, image0, image1, class0=0, class1=0):
-        """image0, image1: [1, 1, H, W] in [0, 1], H and W multiples of 8. Returns a dict."""
-        cfg = self.cfg
+    def coarse_stage(self, image0, image1, class0, class1):
+        """image0, image1 [B, 1, H, W]; classes [B] long. Returns the coarse tokens f0, f1
+        [B, L, C], the dual-softmax matrix [B, L, L], the fine maps [2B, Cf, H/2, W/2] (image0's
+        first) and the coarse grid (hc, wc)."""
         h, w = image0.shape[-2:]
         assert image1.shape[-2:] == (h, w) and h % 8 == 0 and w % 8 == 0
+        b = image0.shape[0]
         coarse, fine = self.backbone(torch.cat([image0, image1], 0))
         c = coarse.shape[1]
         hc, wc = h // 8, w // 8
         coarse = coarse + sine_encoding(c, hc, wc)[None]
         if self.film is not None:
-            classes = (torch.stack([class0, class1]).reshape(2) if isinstance(class0, torch.Tensor)
-                       else torch.tensor([class0, class1]))
-            coarse = self.film(coarse, classes)
-        tokens = coarse.flatten(2).transpose(1, 2)                 # [2, L, C]
-        f0, f1 = self.coarse(tokens[0:1], tokens[1:2])
+            coarse = self.film(coarse, torch.cat([class0, class1]))
+        tokens = coarse.flatten(2).transpose(1, 2)                 # [2B, L, C]
+        f0, f1 = self.coarse(tokens[:b], tokens[b:])
+        sim = (f0 / c ** 0.5) @ (f1 / c ** 0.5).transpose(1, 2) / self.cfg["temperature"]
+        conf = F.softmax(sim, 1) * F.softmax(sim, 2)                # [B, L0, L1]
+        return f0, f1, conf, fine, (hc, wc)
 
-        sim = (f0[0] / c ** 0.5) @ (f1[0] / c ** 0.5).t() / cfg["temperature"]
-        conf = F.softmax(sim, 0) * F.softmax(sim, 1)                # [L0, L1]
-        keep = border_mask(hc, wc, cfg["border"])
-        mask = (conf > cfg["threshold"]) & keep[:, None] & keep[None, :]
-        mask = mask & (conf == conf.max(dim=1, keepdim=True)[0]) & (conf == conf.max(dim=0, keepdim=True)[0])
-        i_ids, j_ids = torch.nonzero(mask, as_tuple=True)
-        mconf = conf[i_ids, j_ids]
+    def coarse_matches(self, conf, hc, wc):
+        """Thresholded mutual nearest neighbours away from the border: (b, i, j) ids."""
+        keep = border_mask(hc, wc, self.cfg["border"])
+        mask = (conf > self.cfg["threshold"]) & keep[None, :, None] & keep[None, None, :]
+        mask = (mask & (conf == conf.max(dim=2, keepdim=True)[0])
+                & (conf == conf.max(dim=1, keepdim=True)[0]))
+        return torch.nonzero(mask, as_tuple=True)
 
+    def fine_stage(self, f0, f1, fine, b_ids, i_ids, j_ids, wc):
+        """Fine points of coarse matches (b, i, j), in input pixels: points0, points1 [M, 2],
+        and the normalised A and B expectations and B's std for the losses."""
+        cfg = self.cfg
         win, cf = cfg["window"], fine.shape[1]
-        w0 = extract_windows(fine[0], i_ids // wc, i_ids % wc, win, 4)
-        w1_ = extract_windows(fine[1], j_ids // wc, j_ids % wc, win, 4)
-        cwin = self.down_proj(torch.cat([f0[0, i_ids], f1[0, j_ids]], 0))     # [2M, Cf]
+        nb = f0.shape[0]
+        w0 = extract_windows(fine, b_ids, i_ids // wc, i_ids % wc, win, 4)
+        w1_ = extract_windows(fine, b_ids + nb, j_ids // wc, j_ids % wc, win, 4)
+        cwin = self.down_proj(torch.cat([f0[b_ids, i_ids], f1[b_ids, j_ids]], 0))  # [2M, Cf]
         merged = self.merge_feat(torch.cat([torch.cat([w0, w1_], 0),
                                             cwin[:, None, :].expand(-1, win * win, -1)], -1))
         m = i_ids.shape[0]
         g0, g1 = self.fine(merged[:m], merged[m:])
-        center = g0[:, (win * win) // 2, :]
+        gx, gy = window_grid(win)
+        if self.anchor is not None:
+            heat0 = F.softmax(self.anchor(g0).squeeze(-1), dim=1)
+            ex0, ey0, _ = expectation(heat0, gx, gy)
+            center = torch.einsum("mr,mrc->mc", heat0, g0)
+        else:
+            ex0 = ey0 = torch.zeros(m)
+            center = g0[:, (win * win) // 2, :]
         heat = F.softmax(torch.einsum("mc,mrc->mr", center, g1) / cf ** 0.5, dim=1)
-        grid = torch.linspace(-1.0, 1.0, win)
-        gy, gx = torch.meshgrid(grid, grid, indexing="ij")
-        gx, gy = gx.reshape(-1), gy.reshape(-1)
-        ex = (heat * gx).sum(1)
-        ey = (heat * gy).sum(1)
-        var = (heat * gx * gx).sum(1) - ex ** 2 + (heat * gy * gy).sum(1) - ey ** 2
-        std = torch.sqrt(torch.clamp(var, min=1e-10))
-        half = win // 2
-        pts0 = torch.stack([(i_ids % wc) * 8, (i_ids // wc) * 8], 1).float()
-        pts1 = torch.stack([(j_ids % wc) * 8 + ex * half * 2, (j_ids // wc) * 8 + ey * half * 2], 1)
-        return {"conf": conf, "i_ids": i_ids, "j_ids": j_ids, "mconf": mconf,
-                "points0": pts0, "points1": pts1, "std": std, "coarse0": f0[0], "coarse1": f1[0]}
+        ex, ey, std = expectation(heat, gx, gy)
+        reach = (win // 2) * 2  # input pixels from the cell centre to the window's edge
+        pts0 = torch.stack([(i_ids % wc) * 8 + ex0 * reach, (i_ids // wc) * 8 + ey0 * reach], 1)
+        pts1 = torch.stack([(j_ids % wc) * 8 + ex * reach, (j_ids // wc) * 8 + ey * reach], 1)
+        return {"points0": pts0.float(), "points1": pts1.float(), "std": std,
+                "offset0": torch.stack([ex0, ey0], 1), "offset1": torch.stack([ex, ey], 1)}
+
+    def forward(self, image0, image1, class0=0, class1=0):
+        """image0, image1: [1, 1, H, W] in [0, 1], H and W multiples of 8. Returns a dict."""
+        def as_classes(c):
+            return c.reshape(1).long() if isinstance(c, torch.Tensor) else torch.tensor([c])
+        f0, f1, conf, fine, (hc, wc) = self.coarse_stage(image0, image1, as_classes(class0),
+                                                         as_classes(class1))
+        b_ids, i_ids, j_ids = self.coarse_matches(conf, hc, wc)
+        out = self.fine_stage(f0, f1, fine, b_ids, i_ids, j_ids, wc)
+        out.update({"conf": conf[0], "i_ids": i_ids, "j_ids": j_ids, "mconf": conf[b_ids, i_ids, j_ids],
+                    "coarse0": f0[0], "coarse1": f1[0]})
+        return out
 
 
 def fold_free_state_dict(model):

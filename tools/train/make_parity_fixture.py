@@ -51,9 +51,16 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "..", "tests", "data", "nn"))
     args = parser.parse_args()
+    write_fixture(args.out, "parity", anchor=False)
+    write_fixture(args.out, "parity_anchor", anchor=True)
+
+
+def write_fixture(folder, prefix, anchor):
+    """prefix_weights / prefix_expected; anchor: the A-side refinement (gimm_model.py)."""
     gen = torch.Generator().manual_seed(20261123)
     torch.manual_seed(20261123)
-    cfg = dict(DEFAULT_CONFIG, widths=[8, 16, 32], coarse_heads=4, fine_heads=2, threshold=0.0)
+    cfg = dict(DEFAULT_CONFIG, widths=[8, 16, 32], coarse_heads=4, fine_heads=2, threshold=0.0,
+               anchor=anchor)
     model = GimmMatcher(cfg).eval()
     randomise(model, gen)
 
@@ -70,20 +77,23 @@ def main():
         model.cfg["threshold"] = float((confs[k - 1] + confs[k]) / 2)
         out = model(image0, image1, *CLASSES)
 
-    os.makedirs(args.out, exist_ok=True)
-    save_file(os.path.join(args.out, "parity_weights.safetensors"), fold_free_state_dict(model),
-              config_metadata(model.cfg))
+    os.makedirs(folder, exist_ok=True)
+    # Without the anchor, the config is written as before the key existed: the loader's
+    # backward default is tested by the same file.
+    written = {k: v for k, v in model.cfg.items() if k != "anchor" or anchor}
+    save_file(os.path.join(folder, f"{prefix}_weights.safetensors"), fold_free_state_dict(model),
+              config_metadata(written))
     expected = {
         "image0": image0[0, 0], "image1": image1[0, 0], "confidence": out["conf"],
         "i_ids": out["i_ids"].float(), "j_ids": out["j_ids"].float(), "mconf": out["mconf"],
         "points0": out["points0"], "points1": out["points1"],
     }
-    save_file(os.path.join(args.out, "parity_expected.safetensors"),
+    save_file(os.path.join(folder, f"{prefix}_expected.safetensors"),
               {k: v.detach().float().contiguous().numpy() for k, v in expected.items()},
               {"class0": str(CLASSES[0]), "class1": str(CLASSES[1]),
                "matches": str(len(out["i_ids"])), "probe_matches": str(len(confs))})
     print(f"parity fixture: {len(out['i_ids'])} of {len(confs)} mutual matches kept "
-          f"(threshold {model.cfg['threshold']:.6f}); written to {os.path.normpath(args.out)}")
+          f"(threshold {model.cfg['threshold']:.6f}); {prefix}_* written to {os.path.normpath(folder)}")
 
 
 if __name__ == "__main__":

@@ -68,6 +68,7 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   c.threshold = config_value<float>(j, "threshold", where);
   c.border = config_value<int>(j, "border", where);
   c.window = config_value<int>(j, "window", where);
+  if (j.contains("anchor")) c.anchor = config_value<bool>(j, "anchor", where);
   try {
     c.validate();
   } catch (const Error& e) {

@@ -43,6 +43,10 @@ struct MatcherConfig {
   float threshold = 0.2f;
   int border = 1;
   int window = 5;
+  /// The A point refined inside its window (a learned score per window pixel, soft-argmax;
+  /// its score-weighted feature queries image 1's window) instead of the coarse cell centre.
+  /// Absent in weights files written before it existed: false.
+  bool anchor = false;
 
   std::int64_t coarse_dim() const { return widths[2]; }
   std::int64_t fine_dim() const { return widths[0]; }
@@ -189,6 +193,7 @@ class Matcher {
     down_proj_ = linear_layer(w, "down_proj", w3, w1, true);
     merge_feat_ = linear_layer(w, "merge_feat", 2 * w1, w1, true);
     fine_ = encoders(w, "fine", w1, config_.fine_layers);
+    if (config_.anchor) anchor_ = linear_layer(w, "anchor", w1, 1, true);
   }
 
   Tensor run_block(const Tensor& x, const Block& b) const {
@@ -283,7 +288,7 @@ class Matcher {
   Block layers_[3][2];
   Conv2d out3_, out2_, out2_refine_a_, out2_refine_b_, out1_, out1_refine_a_, out1_refine_b_;
   Tensor film_table_;
-  Linear film1_, film2_, down_proj_, merge_feat_;
+  Linear film1_, film2_, down_proj_, merge_feat_, anchor_;
   std::vector<Encoder> coarse_, fine_;
 };
 
@@ -371,23 +376,41 @@ inline MatcherOutput Matcher::match(const Tensor& image0, const Tensor& image1, 
             std::vector<float>(merged.data() + m * ww * cf, merged.data() + 2 * m * ww * cf));
   transform(fine_, config_.fine_heads, g0, g1);
 
-  // Expectation of the centre pixel's similarity heat map over image 1's window.
+  // The A point: the cell centre, or with the anchor the soft-argmax of its window scores, whose
+  // score-weighted feature is the query; then the expectation of the query's similarity heat
+  // map over image 1's window.
   const float sqrt_cf = std::sqrt(float(cf));
   const float reach = float(win / 2) * 2.0f;  // window half-width in image pixels
   std::vector<float> heat(static_cast<std::size_t>(ww));
+  std::vector<float> query(static_cast<std::size_t>(cf));
+  const Tensor scores = config_.anchor ? linear(g0, anchor_) : Tensor();  // [M, WW, 1]
   for (std::int64_t k = 0; k < m; ++k) {
-    const float* centre = g0.data() + (k * ww + ww / 2) * cf;
+    const float* window0 = g0.data() + k * ww * cf;
+    Expectation e0;  // zero offset: the cell centre
+    if (config_.anchor) {
+      std::copy_n(scores.data() + k * ww, ww, heat.data());
+      softmax_rows_inplace(heat.data(), 1, ww);
+      e0 = soft_argmax(heat.data(), win);
+      std::fill(query.begin(), query.end(), 0.0f);
+      for (int p = 0; p < ww; ++p)
+        for (std::int64_t ch = 0; ch < cf; ++ch)
+          query[static_cast<std::size_t>(ch)] +=
+              heat[static_cast<std::size_t>(p)] * window0[p * cf + ch];
+    } else {
+      std::copy_n(window0 + (ww / 2) * cf, cf, query.data());
+    }
     for (int p = 0; p < ww; ++p) {
       const float* other = g1.data() + (k * ww + p) * cf;
       float dot = 0.0f;
-      for (std::int64_t ch = 0; ch < cf; ++ch) dot += centre[ch] * other[ch];
+      for (std::int64_t ch = 0; ch < cf; ++ch)
+        dot += query[static_cast<std::size_t>(ch)] * other[ch];
       heat[static_cast<std::size_t>(p)] = dot / sqrt_cf;
     }
     softmax_rows_inplace(heat.data(), 1, ww);
     const Expectation e = soft_argmax(heat.data(), win);
     const float u0 = float(out.i_ids[k] % wc * 8), v0 = float(out.i_ids[k] / wc * 8);
     const float u1 = float(out.j_ids[k] % wc * 8), v1 = float(out.j_ids[k] / wc * 8);
-    out.points0.push_back({u0, v0});
+    out.points0.push_back({u0 + e0.x * reach, v0 + e0.y * reach});
     out.points1.push_back({u1 + e.x * reach, v1 + e.y * reach});
     out.fine_std.push_back(e.std);
   }
