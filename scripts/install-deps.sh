@@ -12,7 +12,7 @@ core=(build-essential cmake pkg-config git libeigen3-dev libglm-dev libembree-de
       nlohmann-json3-dev catch2 libbenchmark-dev libcli11-dev zlib1g-dev libpng-dev
       clang-format gnuplot-nox python3-numpy python3-nibabel)
 bench=(plastimatch libopencv-dev python3-opencv hyperfine)
-train=(python3-torch libopenblas0-pthread)
+train=(python3-torch libopenblas0-pthread python3-pil)
 
 wanted=("${core[@]}")
 for group in "$@"; do

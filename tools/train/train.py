@@ -1,0 +1,401 @@
+#!/usr/bin/env python3
+"""Trains the GIMM matcher on a gimm-dataset folder, on CPU (or GPU), resumably.
+
+    /usr/bin/python3 tools/train/train.py --dataset DATA --run RUN [--minutes 90] [--resume]
+
+Writes into RUN: checkpoint.pt (every --checkpoint-minutes, and at the end), best.pt and
+best.safetensors (the best validation Prec@3px with coverage >= 0.5, else the best coverage),
+last.safetensors, log.jsonl (one JSON object per logged step and per validation) and config.json.
+--resume continues a run exactly: same step, schedule, data order and random streams.
+
+Several processes (gloo on CPU, NCCL on GPU): set WORLD_SIZE, RANK, LOCAL_RANK, MASTER_ADDR
+and MASTER_PORT by hand for each process (torchrun from Debian's torch 1.13 fails on Python
+3.11); docs/training.md has the commands. Each rank takes every WORLD_SIZE-th pair of the epoch's
+order; gradients are averaged by one all-reduce per step; ranks decide to stop together.
+"""
+import argparse
+import json
+import math
+import os
+import random
+import sys
+import time
+
+import numpy as np
+import torch
+import torch.distributed as dist
+import torch.nn.functional as F
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from gimm_data import load_pairs  # noqa: E402
+from gimm_model import DEFAULT_CONFIG, GimmMatcher, config_metadata, fold_free_state_dict  # noqa: E402
+from safetensors_io import save_file  # noqa: E402
+from supervision import PairTruth, fine_losses, fine_targets, focal_loss  # noqa: E402
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--dataset", required=True, help="gimm-dataset folder")
+    p.add_argument("--run", required=True, help="run folder (checkpoints, logs, weights)")
+    p.add_argument("--resume", action="store_true", help="continue RUN/checkpoint.pt")
+    p.add_argument("--minutes", type=float, default=90.0, help="wall-clock budget of this call")
+    p.add_argument("--steps", type=int, default=20000, help="schedule length (cosine to 0)")
+    p.add_argument("--warmup", type=int, default=300)
+    p.add_argument("--lr", type=float, default=2e-3)
+    p.add_argument("--weight-decay", type=float, default=0.05)
+    p.add_argument("--clip", type=float, default=1.0, help="gradient norm clipping")
+    p.add_argument("--batch", type=int, default=4, help="pairs per step per rank")
+    p.add_argument("--size", type=int, default=128, help="network input: longer side, pixels")
+    p.add_argument("--widths", type=int, nargs=3, default=[16, 32, 64])
+    p.add_argument("--coarse-layers", nargs="+", default=["self", "cross"])
+    p.add_argument("--fine-layers", nargs="+", default=["self", "cross"])
+    p.add_argument("--no-film", action="store_true", help="the LoFTR-style ablation")
+    p.add_argument("--no-anchor", action="store_true", help="A point at the cell centre (LoFTR)")
+    p.add_argument("--max-fine", type=int, default=128, help="fine matches per pair, at most")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=0, help="torch threads (0: cores / ranks)")
+    p.add_argument("--log-every", type=int, default=20)
+    p.add_argument("--checkpoint-minutes", type=float, default=5.0)
+    p.add_argument("--val-minutes", type=float, default=15.0)
+    p.add_argument("--val-pairs", type=int, default=150, help="validation pairs (0: all)")
+    p.add_argument("--train-limit", type=int, default=0, help="use the first N train pairs")
+    p.add_argument("--val-threshold", type=float, default=0.05, help="coarse threshold at val")
+    return p.parse_args(argv)
+
+
+def blas_in_use():
+    """The BLAS library this process has mapped (OpenBLAS trains 1.4-2x faster than the
+    reference BLAS on this machine)."""
+    torch.ones(64, 64) @ torch.ones(64, 64)
+    try:
+        with open("/proc/self/maps") as f:
+            libs = {line.split()[-1] for line in f if "blas" in line.lower() and ".so" in line}
+        return ", ".join(sorted(libs)) or "none mapped (MKL or built-in)"
+    except OSError:
+        return "unknown"
+
+
+# ---- distributed -------------------------------------------------------------------------
+
+def init_ranks():
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if world > 1:
+        backend = "nccl" if torch.cuda.is_available() else "gloo"
+        dist.init_process_group(backend)
+        return dist.get_rank(), world
+    return 0, 1
+
+
+def all_reduce_mean(tensors, world):
+    if world > 1:
+        for t in tensors:
+            dist.all_reduce(t)
+            t /= world
+
+
+def all_stop(stop, world):
+    """True on every rank when any rank wants to stop."""
+    if world == 1:
+        return stop
+    flag = torch.tensor([1.0 if stop else 0.0])
+    dist.all_reduce(flag, op=dist.ReduceOp.MAX)
+    return bool(flag.item())
+
+
+# ---- data --------------------------------------------------------------------------------
+
+def augment(image, gen):
+    """X-ray photometric augmentation (no geometry: the cameras and view class must hold):
+    gamma, contrast and brightness, blur, Poisson-like and Gaussian noise."""
+    x = image.float()
+    x = x.clamp(0, 1) ** math.exp(gen.uniform(-0.35, 0.35))
+    mean = x.mean()
+    x = (x - mean) * gen.uniform(0.8, 1.25) + mean + gen.uniform(-0.05, 0.05)
+    if gen.random() < 0.3:
+        sigma = gen.uniform(0.3, 0.9)
+        r = torch.arange(-2, 3, dtype=torch.float32)
+        k = torch.exp(-r ** 2 / (2 * sigma ** 2))
+        k = (k / k.sum())
+        x = F.conv2d(x[None, None], k.view(1, 1, 1, 5), padding=(0, 2))
+        x = F.conv2d(x, k.view(1, 1, 5, 1), padding=(2, 0))[0, 0]
+    g = torch.Generator().manual_seed(gen.randrange(1 << 31))
+    x = x + gen.uniform(0, 0.03) * x.clamp(min=0).sqrt() * torch.randn(x.shape, generator=g)
+    x = x + gen.uniform(0, 0.01) * torch.randn(x.shape, generator=g)
+    return x.clamp(0, 1)
+
+
+def pad8(image):
+    h, w = image.shape
+    return F.pad(image, (0, (-w) % 8, 0, (-h) % 8))
+
+
+def make_batch(samples, truths, gen, train=True):
+    prep = (lambda x: augment(x, gen)) if train else (lambda x: x.float())
+    a = torch.stack([pad8(prep(s.image_a)) for s in samples])[:, None]
+    b = torch.stack([pad8(prep(s.image_b)) for s in samples])[:, None]
+    ca = torch.tensor([s.class_a for s in samples])
+    cb = torch.tensor([s.class_b for s in samples])
+    return a, b, ca, cb, [truths[id(s)] for s in samples]
+
+
+def epoch_order(n, seed, epoch):
+    return np.random.default_rng([seed, epoch]).permutation(n)
+
+
+# ---- steps -------------------------------------------------------------------------------
+
+def train_step(model, batch, max_fine):
+    image0, image1, c0, c1, truths = batch
+    f0, f1, conf, fine, (hc, wc) = model.coarse_stage(image0, image1, c0, c1)
+    positive = torch.zeros_like(conf, dtype=torch.bool)
+    gt_b, gt_i, gt_j = [], [], []
+    for n, t in enumerate(truths):
+        positive[n, t.i, t.j] = True
+        gt_b.append(np.full(len(t.i), n))
+        gt_i.append(t.i)
+        gt_j.append(t.j)
+    loss_pos, loss_neg = focal_loss(conf, positive)
+    # Fine matches: the ground-truth coarse matches, padded with predicted ones (LoFTR), at most
+    # max_fine per pair.
+    with torch.no_grad():
+        pb, pi, pj = model.coarse_matches(conf, hc, wc)
+    b_ids, i_ids, j_ids = [], [], []
+    for n in range(len(truths)):
+        gi, gj = gt_i[n], gt_j[n]
+        sel = pb == n
+        extra = [(int(i), int(j)) for i, j in zip(pi[sel], pj[sel]) if not positive[n, i, j]]
+        pairs = list(zip(gi.tolist(), gj.tolist())) + extra
+        pairs = pairs[:max_fine]
+        b_ids += [n] * len(pairs)
+        i_ids += [p[0] for p in pairs]
+        j_ids += [p[1] for p in pairs]
+    b_ids, i_ids, j_ids = (torch.tensor(x, dtype=torch.long) for x in (b_ids, i_ids, j_ids))
+    reach = (model.cfg["window"] // 2) * 2
+    if len(i_ids):
+        out = model.fine_stage(f0, f1, fine, b_ids, i_ids, j_ids, wc)
+        targets = fine_targets(truths, b_ids, i_ids, j_ids, out["points0"], wc, reach)
+        loss_a, loss_b = fine_losses(out, *targets, reach)
+        if model.anchor is None:
+            loss_a = loss_a * 0
+    else:  # no match at all: keep every parameter in the graph so all ranks reduce alike
+        loss_a = loss_b = sum(p.sum() for p in model.parameters()) * 0
+    loss = loss_pos + loss_neg + loss_a + loss_b
+    return loss, {"pos": loss_pos.item(), "neg": loss_neg.item(), "fine_a": loss_a.item(),
+                  "fine_b": loss_b.item(), "gt": int(sum(len(t.i) for t in truths))}
+
+
+def lr_at(step, args):
+    if step < args.warmup:
+        return args.lr * (step + 1) / args.warmup
+    t = min(1.0, (step - args.warmup) / max(1, args.steps - args.warmup))
+    return args.lr * (0.02 + 0.98 * 0.5 * (1 + math.cos(math.pi * t)))
+
+
+# ---- validation (the protocol of include/gimm/metrics/protocol.hpp, K = 20) ---------------
+
+def score_direction(src, dst, src_labels, dst_labels, src_mask):
+    u, v = int(np.floor(src[0] + 0.5)) if src[0] >= 0 else -int(np.floor(-src[0] + 0.5)), \
+        int(np.floor(src[1] + 0.5)) if src[1] >= 0 else -int(np.floor(-src[1] + 0.5))
+    h, w = src_mask.shape
+    if not (np.isfinite(src).all() and 0 <= u < w and 0 <= v < h and src_mask[v, u]):
+        return None
+    j = int(np.argmin(((src_labels - src) ** 2).sum(1)))
+    return float(np.linalg.norm(dst - dst_labels[j]))
+
+
+@torch.no_grad()
+def validate(model, pairs, threshold, k=20):
+    model.eval()
+    saved = model.cfg["threshold"]
+    model.cfg["threshold"] = threshold
+    errors, slots, seconds = [], 0, 0.0
+    for s in pairs:
+        a, b = pad8(s.image_a.float())[None, None], pad8(s.image_b.float())[None, None]
+        t0 = time.perf_counter()
+        out = model(a, b, s.class_a, s.class_b)
+        seconds += time.perf_counter() - t0
+        order = torch.argsort(-out["mconf"], stable=True)[:k]
+        su, sv = s.scale
+        back = lambda p: np.stack([(p[:, 0] + 0.5) * su - 0.5, (p[:, 1] + 0.5) * sv - 0.5], 1)  # noqa
+        pa, pb = back(out["points0"][order].numpy()), back(out["points1"][order].numpy())
+        slots += 2 * k
+        for m in range(len(order)):
+            for src, dst, sl, dl, mask in ((pa[m], pb[m], s.a_full, s.b_full, s.mask_a),
+                                           (pb[m], pa[m], s.b_full, s.a_full, s.mask_b)):
+                e = score_direction(src, dst, sl, dl, mask)
+                if e is not None:
+                    errors.append(e)
+    model.cfg["threshold"] = saved
+    model.train()
+    e = np.array(errors)
+    return {"pairs": len(pairs), "coverage": len(e) / max(1, slots),
+            "prec_1px": float((e <= 1).mean()) if len(e) else float("nan"),
+            "prec_3px": float((e <= 3).mean()) if len(e) else float("nan"),
+            "prec_5px": float((e <= 5).mean()) if len(e) else float("nan"),
+            "mean_px": float(e.mean()) if len(e) else float("nan"),
+            "seconds_per_pair": seconds / max(1, len(pairs))}
+
+
+def val_key(v):
+    """Best = highest Prec@3px among runs with coverage >= 0.5; below that, highest coverage."""
+    p = v["prec_3px"] if v["prec_3px"] == v["prec_3px"] else 0.0
+    return (1, p) if v["coverage"] >= 0.5 else (0, v["coverage"])
+
+
+# ---- main --------------------------------------------------------------------------------
+
+def save_weights(model, path, threshold):
+    cfg = dict(model.cfg, threshold=threshold)
+    tmp = path + ".tmp"
+    save_file(tmp, fold_free_state_dict(model), config_metadata(cfg))
+    os.replace(tmp, path)
+
+
+def save_checkpoint(path, state):
+    tmp = path + ".tmp"
+    torch.save(state, tmp)
+    os.replace(tmp, path)
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    rank, world = init_ranks()
+    torch.set_num_threads(args.threads or max(1, (os.cpu_count() or 1) // world))
+    os.makedirs(args.run, exist_ok=True)
+    ckpt_path = os.path.join(args.run, "checkpoint.pt")
+    state = None
+    if args.resume:
+        if not os.path.isfile(ckpt_path):
+            raise SystemExit(f"train: --resume: {ckpt_path} does not exist")
+        state = torch.load(ckpt_path)
+        keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads"}
+        saved = state["args"]
+        args = argparse.Namespace(**{**saved, **{k: getattr(args, k) for k in keep}})
+    if rank == 0:
+        print(f"train: BLAS {blas_in_use()}; {torch.get_num_threads()} threads x {world} ranks",
+              flush=True)
+    cfg = dict(DEFAULT_CONFIG, widths=args.widths, coarse_layers=args.coarse_layers,
+               fine_layers=args.fine_layers, film=not args.no_film, anchor=not args.no_anchor,
+               coarse_heads=4, fine_heads=2 if args.widths[0] % 4 else 4)
+    torch.manual_seed(args.seed)
+    model = GimmMatcher(cfg)
+    if model.film is not None and state is None:
+        with torch.no_grad():  # an untrained FiLM adds one large offset to every token
+            model.film.mlp[2].weight.mul_(0.1)
+            model.film.mlp[2].bias.mul_(0.1)
+    opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=args.weight_decay)
+    t_load = time.time()
+    train = load_pairs(args.dataset, "train", args.size, args.train_limit or None, rank == 0)
+    val = load_pairs(args.dataset, "val", args.size, args.val_pairs or None, rank == 0) \
+        if rank == 0 else []
+    hc, wc = (train[0].image_a.shape[0] + 7) // 8, (train[0].image_a.shape[1] + 7) // 8
+    truths = {id(s): PairTruth(s.a, s.b, hc, wc) for s in train}
+    if rank == 0:
+        params = sum(p.numel() for p in model.parameters())
+        print(f"train: {len(train)} train pairs, {len(val)} val pairs at {args.size} px, loaded in "
+              f"{time.time() - t_load:.0f} s; {params} parameters; config {json.dumps(cfg)}",
+              flush=True)
+        with open(os.path.join(args.run, "config.json"), "w") as f:
+            json.dump({"args": vars(args), "model": cfg}, f, indent=1)
+    step, epoch, pos, best, cpu0 = 0, 0, 0, None, 0.0
+    gen = random.Random(args.seed * 1000 + rank)
+    if state is not None:
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["optimizer"])
+        step, epoch, pos, best = state["step"], state["epoch"], state["pos"], state["best"]
+        gen.setstate(state["gen"][rank])
+        torch.set_rng_state(state["torch_rng"])
+        cpu0 = state.get("cpu_seconds", 0.0)
+    model.train()
+    start = time.time()
+    cpu_start = time.process_time()
+    last_ckpt = last_val = start
+    log = open(os.path.join(args.run, "log.jsonl"), "a") if rank == 0 else None
+    per_step = args.batch * world
+    order = epoch_order(len(train), args.seed, epoch)
+    seen_window, t_window = 0, time.time()
+
+    def checkpoint():
+        gens = [None] * world
+        if world > 1:
+            dist.all_gather_object(gens, gen.getstate())
+        else:
+            gens = [gen.getstate()]
+        if rank == 0:
+            save_checkpoint(ckpt_path, {
+                "model": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
+                "epoch": epoch, "pos": pos, "best": best, "gen": gens, "args": vars(args),
+                "torch_rng": torch.get_rng_state(),
+                "cpu_seconds": cpu0 + (time.process_time() - cpu_start) * world})
+            save_weights(model, os.path.join(args.run, "last.safetensors"), args.val_threshold)
+
+    while True:
+        out_of_time = time.time() - start > args.minutes * 60 or step >= args.steps
+        if all_stop(out_of_time, world):
+            break
+        if pos + per_step > len(order):
+            epoch, pos = epoch + 1, 0
+            order = epoch_order(len(train), args.seed, epoch)
+        idx = order[pos + rank:pos + per_step:world]
+        pos += per_step
+        batch = make_batch([train[i] for i in idx], truths, gen)
+        for g in opt.param_groups:
+            g["lr"] = lr_at(step, args)
+        loss, terms = train_step(model, batch, args.max_fine)
+        opt.zero_grad(set_to_none=False)
+        loss.backward()
+        grads = [p.grad for p in model.parameters() if p.grad is not None]
+        all_reduce_mean(grads, world)
+        norm = torch.nn.utils.clip_grad_norm_(model.parameters(), args.clip)
+        opt.step()
+        step += 1
+        seen_window += per_step
+        if rank == 0 and step % args.log_every == 0:
+            rate = seen_window / max(1e-9, time.time() - t_window)
+            left = (min(args.steps - step, (args.minutes * 60 - (time.time() - start)) * rate
+                        / per_step)) / max(1e-9, rate / per_step)
+            print(f"step {step}/{args.steps} epoch {epoch} pairs {step * per_step} loss "
+                  f"{loss.item():.4f} (pos {terms['pos']:.4f} neg {terms['neg']:.5f} fine_a "
+                  f"{terms['fine_a']:.4f} fine_b {terms['fine_b']:.4f}) gt {terms['gt']} lr "
+                  f"{lr_at(step, args):.2e} |g| {norm:.2f} {rate:.2f} pairs/s ETA {left / 60:.1f} min",
+                  flush=True)
+            log.write(json.dumps({"step": step, "epoch": epoch, "pairs": step * per_step,
+                                  "loss": loss.item(), **terms, "lr": lr_at(step, args),
+                                  "grad_norm": float(norm), "pairs_per_s": rate,
+                                  "time_s": time.time() - start}) + "\n")
+            log.flush()
+            seen_window, t_window = 0, time.time()
+        if time.time() - last_ckpt > args.checkpoint_minutes * 60:
+            checkpoint()
+            last_ckpt = time.time()
+        if rank == 0 and val and time.time() - last_val > args.val_minutes * 60:
+            best = run_validation(model, val, args, step, log, best)
+            last_val = time.time()
+    if rank == 0 and val:
+        best = run_validation(model, val, args, step, log, best)
+    checkpoint()
+    if rank == 0:
+        cpu = cpu0 + (time.process_time() - cpu_start) * world
+        print(f"train: stopped at step {step} ({step * per_step} pairs) after "
+              f"{(time.time() - start) / 60:.1f} min; CPU time so far {cpu / 3600:.2f} h", flush=True)
+    if world > 1:
+        dist.destroy_process_group()
+
+
+def run_validation(model, val, args, step, log, best):
+    v = validate(model, val, args.val_threshold)
+    v["step"] = step
+    improved = best is None or val_key(v) > val_key(best)
+    print(f"val step {step}: Prec@3px {v['prec_3px']:.3f} coverage {v['coverage']:.3f} "
+          f"2D mean {v['mean_px']:.2f} px ({v['pairs']} pairs, {v['seconds_per_pair']:.3f} s/pair)"
+          f"{' (best)' if improved else ''}", flush=True)
+    log.write(json.dumps({"val": v}) + "\n")
+    log.flush()
+    if improved:
+        save_weights(model, os.path.join(args.run, "best.safetensors"), args.val_threshold)
+        return v
+    return best
+
+
+if __name__ == "__main__":
+    main()
