@@ -77,15 +77,16 @@ int match_dataset(const gimm::nn::Matcher& matcher, const std::string& dataset,
   std::size_t total = 0;
   for (std::size_t n = 0; n < ids.size(); ++n) {
     const gimm::PairTruth truth = reader.pair(ids[n]);
-    const std::string patient = ids[n].substr(0, ids[n].find('/'));
-    const std::string views = (reader.root() / "patients" / patient / "views").string() + "/";
-    auto camera = [&](const std::string& view) {
-      return use_cameras ? read_camera(views + view + ".camera.json") : std::nullopt;
+    const std::string patient = gimm::split_pair_id(ids[n]).first;
+    const gimm::DatasetLayout& layout = reader.layout();
+    auto camera = [&](const std::string& view) -> std::optional<gimm::Camerad> {
+      if (!use_cameras) return std::nullopt;
+      return reader.camera(patient, view);
     };
-    gimm::PairMatchResult result =
-        gimm::match_pair(matcher, gimm::read_png_unit(views + truth.view_a + ".png"),
-                         gimm::read_png_unit(views + truth.view_b + ".png"), truth.view_class_a,
-                         truth.view_class_b, camera(truth.view_a), camera(truth.view_b), options);
+    gimm::PairMatchResult result = gimm::match_pair(
+        matcher, gimm::read_png_unit(layout.view_image(patient, truth.view_a)),
+        gimm::read_png_unit(layout.view_image(patient, truth.view_b)), truth.view_class_a,
+        truth.view_class_b, camera(truth.view_a), camera(truth.view_b), options);
     result.matches.pair = ids[n];
     gimm::write_matches(gimm::matches_path(out, ids[n]), result.matches);
     total += result.matches.size();

@@ -95,7 +95,8 @@ TEST_CASE("Dataset reader: pair ids, labels, F and masks", "[metrics]") {
   fs::create_directories(p / "views");
   gimm::write_json_file(
       root / "manifest.json",
-      {{"patients", {{{"id", "p1"}, {"status", "ok"}}, {{"id", "p2"}, {"status", "failed"}}}}});
+      {{"format", "gimm-dataset/1"},
+       {"patients", {{{"id", "p1"}, {"status", "ok"}}, {{"id", "p2"}, {"status", "failed"}}}}});
   fs::create_directories(root / "splits");
   gimm::write_file_atomic(root / "splits" / "test.txt", std::string("p1\n"));
   gimm::write_file_atomic(root / "splits" / "train.txt", std::string(""));
@@ -105,6 +106,8 @@ TEST_CASE("Dataset reader: pair ids, labels, F and masks", "[metrics]") {
       {"view_class_a", 4},
       {"view_class_b", 1},
       {"F", {{0, 0, 0}, {0, 0, -1}, {0, 1, 0}}},
+      {"dense_fields",
+       {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm", "branch", "point", "radius_mm"}},
       {"dense", {{1, 2, 3, 4, 5, 6, 7, 0, 3, 0.5}, {2, 2, 4, 4, 5, 6, 8, 0, 4, 0.5}}}};
   gimm::write_json_file(p / "pairs" / "RCA_00-01.json", pair);
   gimm::Image<std::uint8_t> mask(8, 10);

@@ -81,6 +81,19 @@ inline std::vector<ProjectedPoint> label_view(const std::vector<LabelPoint>& poi
   return out;
 }
 
+/// Marks the in-image points of one view hidden behind another vessel: `unoccluded(world)` says
+/// whether the ray from the source to a point meets no other vessel first (mesh mode:
+/// VesselMeshProjector::unoccluded). Without such a test every point stays visible.
+template <class Unoccluded>
+void mark_occlusion(std::vector<ProjectedPoint>& view, const std::vector<LabelPoint>& points,
+                    Unoccluded&& unoccluded) {
+  GIMM_CHECK(view.size() == points.size(), "mark_occlusion: " << view.size()
+                                                              << " projected points for "
+                                                              << points.size() << " points");
+  for (std::size_t n = 0; n < points.size(); ++n)
+    if (view[n].in_image) view[n].visible = unoccluded(points[n].world);
+}
+
 /// Farthest-point sampling in 3D: starts at a seeded random point, then repeatedly takes the
 /// point farthest from everything chosen (ties: the lowest index). Returns indices into
 /// `points`, at most `count`, all distinct.

@@ -2,16 +2,8 @@
 /// The DRR dataset pipeline: CT + coronary label -> angiograms, vessel masks, cameras and
 /// dense 3D-2D pair labels, one patient at a time, resumable and shardable.
 ///
-/// Layout under the output directory (docs/dataset.md):
-///   patients/<id>/centerlines.json            centerlines extracted from the label
-///   patients/<id>/views/<SYS>_<nn>.png        16-bit angiogram (Beer-Lambert, min-max)
-///   patients/<id>/views/<SYS>_<nn>.mask.png   8-bit projected vessel mask (0/255)
-///   patients/<id>/views/<SYS>_<nn>.overlap.png 8-bit vessel passages per pixel (mesh mode)
-///   patients/<id>/views/<SYS>_<nn>.camera.json camera, view class, angles
-///   patients/<id>/pairs/<SYS>_<nn>-<mm>.json  pair labels (dense, sparse, F, view classes)
-///   patients/<id>/timings.json                seconds per stage (vary run to run)
-///   patients/<id>/done.json                   the patient's record, written last
-///   manifest.json (or manifest.shard-I-of-N.json), splits/{train,val,test}.txt
+/// The files and their layout belong to the dataset room (dataset/layout.hpp, writer.hpp);
+/// the run around this (resume, shards, merge) is pipeline/dataset_run.hpp.
 /// Every file but timings.json is written atomically and depends only on (parameters, seed,
 /// patient id), so a patient whose done.json exists is complete and is skipped on restart, and
 /// shards write disjoint patients whose union is byte-identical to one run (timings.json aside).
@@ -33,6 +25,7 @@
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"
+#include "gimm/dataset/writer.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/centerlines_json.hpp"
@@ -127,6 +120,23 @@ inline std::string imagecas_image_id(const std::filesystem::path& file) {
   return stem.substr(0, stem.size() - tag.size());
 }
 
+/// `count` phantom patients "phantom-0000", ... of run seed `seed` (patient n: phantom seed
+/// seed * 1000003 + n).
+inline std::vector<PatientSource> phantom_sources(int count, std::uint64_t seed, PhantomSize size) {
+  GIMM_CHECK(count > 0, "--phantom must be a positive count, got " << count);
+  std::vector<PatientSource> sources;
+  for (int n = 0; n < count; ++n) {
+    PatientSource s;
+    char id[32];
+    std::snprintf(id, sizeof id, "phantom-%04d", n);
+    s.id = id;
+    s.phantom_seed = seed * 1000003ull + static_cast<std::uint64_t>(n);
+    s.phantom_size = size;
+    sources.push_back(s);
+  }
+  return sources;
+}
+
 /// The file-name patterns scan_imagecas_folder looks for, for messages.
 inline std::string imagecas_patterns() {
   std::string out;
@@ -219,91 +229,6 @@ inline nlohmann::json patient_run(const PatientSource& src, const DatasetOptions
 }
 
 namespace detail {
-
-inline std::string two_digits(std::size_t n) {
-  return (n < 10 ? "0" : "") + std::to_string(n);
-}
-
-/// Every centerline point of the system in one view (column arrays, in the order of
-/// centerlines.json's branches and points).
-inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
-                                       const std::vector<ProjectedPoint>& view) {
-  nlohmann::json u = nlohmann::json::array(), v = u, depth = u, in_image = u, on_mask = u,
-                 overlap = u, visible = u, branch = u, index = u;
-  for (std::size_t n = 0; n < points.size(); ++n) {
-    u.push_back(view[n].uv.x());
-    v.push_back(view[n].uv.y());
-    depth.push_back(view[n].depth);
-    in_image.push_back(view[n].in_image ? 1 : 0);
-    on_mask.push_back(view[n].on_mask ? 1 : 0);
-    overlap.push_back(view[n].overlap);
-    visible.push_back(view[n].visible ? 1 : 0);
-    branch.push_back(points[n].branch);
-    index.push_back(points[n].index);
-  }
-  return {{"u", u},
-          {"v", v},
-          {"depth_mm", depth},
-          {"in_image", in_image},
-          {"on_mask", on_mask},
-          {"overlap", overlap},
-          {"visible", visible},
-          {"branch", branch},
-          {"point", index}};
-}
-
-inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
-                                const SampledView& b, const std::string& name_a,
-                                const std::string& name_b) {
-  nlohmann::json dense = nlohmann::json::array();
-  for (const auto& c : labels.dense)
-    dense.push_back({c.a.x(), c.a.y(), c.b.x(), c.b.y(), c.world.x(), c.world.y(), c.world.z(),
-                     c.branch, c.index, c.radius});
-  return {{"view_a", name_a},
-          {"view_b", name_b},
-          {"view_class_a", a.view_class},
-          {"view_class_b", b.view_class},
-          {"F", gimm::detail::matrix_to_json(labels.F)},
-          {"F_convention", "x_b^T F x_a = 0, pixels"},
-          {"dense_fields",
-           {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm", "branch", "point", "radius_mm"}},
-          {"dense", dense},
-          {"sparse", labels.sparse}};
-}
-
-/// Writes one view's files (`stem` + .png: the 16-bit angiogram; .mask.png; .overlap.png in
-/// mesh mode; .camera.json; .points.json) and returns its projected points. `overlap` and
-/// `mesh` are given in mesh mode only: the overlap map, and the projector that marks points
-/// hidden behind another vessel.
-inline std::vector<ProjectedPoint> write_view(
-    const std::filesystem::path& stem, const Image<float>& integrals, Image<std::uint8_t> vessel,
-    const Image<std::uint8_t>* overlap, const nlohmann::json& camera_json, const Camerad& camera,
-    const std::vector<LabelPoint>& points, const VesselMeshProjector* mesh) {
-  const auto file = [&](const char* suffix) { return stem.string() + suffix; };
-  write_png(file(".png"), to_uint16_min_max(beer_lambert(integrals)));
-  auto view = label_view(points, camera, &vessel, overlap);
-  if (mesh)
-    for (std::size_t n = 0; n < points.size(); ++n)
-      if (view[n].in_image) view[n].visible = mesh->unoccluded(camera, points[n].world);
-  for (auto& px : vessel.storage()) px = px ? 255 : 0;
-  write_png(file(".mask.png"), vessel);
-  if (overlap) write_png(file(".overlap.png"), *overlap);
-  write_json_file(file(".camera.json"), camera_json);
-  write_json_file(file(".points.json"), view_points_json(points, view), -1);
-  return view;
-}
-
-/// What the LCA/RCA split kept of the label: every component, and the voxels and components left
-/// in neither system (specks, trees beyond the two largest). Deterministic, so part of the
-/// record.
-inline nlohmann::json label_json(const CoronarySplit& split) {
-  const int kept = (split.lca_voxels > 0 ? 1 : 0) + (split.rca_voxels > 0 ? 1 : 0);
-  return {{"voxels", split.label_voxels},
-          {"components", split.components},
-          {"dropped_components", split.components - kept},
-          {"dropped_voxels", split.dropped_voxels},
-          {"dropped_fraction", split.dropped_fraction()}};
-}
 
 /// Seconds since the last lap (or since construction).
 class Stopwatch {
@@ -438,14 +363,13 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   split_options.allow_single = o.allow_single_system;
   const auto split = split_coronary_systems(label, split_options, "patient " + src.id + " label");
   t.split = stage.lap();
-  const fs::path dir = out / "patients" / src.id;
-  fs::create_directories(dir / "views");
-  fs::create_directories(dir / "pairs");
+  const DatasetWriter writer(out);
+  writer.create_patient(src.id);
 
   Rng rng = Rng(o.seed).fork(stable_hash(src.id));
   nlohmann::json record = {{"id", src.id},
                            {"split", src.split},
-                           {"label", detail::label_json(split)},
+                           {"label", label_json(split)},
                            {"systems", nlohmann::json::object()}};
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
   // Bone or contrast (the angiography recipe's structure), found once for both systems.
@@ -532,7 +456,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       carm.secondary_deg = plan.views[v].secondary_deg;
       carm.isocenter = centre;
       const Camerad camera = carm.camera();
-      const std::string name = std::string(to_string(system)) + "_" + detail::two_digits(v);
+      const std::string name = view_name(to_string(system), v);
       DrrOptions drr;
       drr.projector = o.projector;
       drr.empty_blocks = &mu_blocks;
@@ -559,9 +483,15 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                                           vessel = std::move(vessel), overlap = std::move(overlap),
                                           cj = std::move(cj), camera, name]() mutable {
             detail::Stopwatch writing;
-            auto view = detail::write_view(dir / "views" / name, integrals, std::move(vessel),
-                                           mesh_mode ? &overlap : nullptr, cj, camera, points,
-                                           mesh_mode ? &*mesh_projector : nullptr);
+            auto view = label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr);
+            if (mesh_mode)
+              mark_occlusion(view, points, [&](const Eigen::Vector3d& world) {
+                return mesh_projector->unoccluded(camera, world);
+              });
+            writer.write_view(
+                src.id, name,
+                {to_uint16_min_max(beer_lambert(integrals)), std::move(vessel),
+                 mesh_mode ? &overlap : nullptr, std::move(cj), view_points_json(points, view)});
             t.writes += writing.lap();
             return view;
           });
@@ -577,11 +507,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                                            cameras[pr.b], o.sparse_count, rng);
       dense_total += labels.dense.size();
       t.pairs += stage.lap();
-      const std::string name = names[pr.a] + "-" + names[pr.b].substr(4);
-      write_json_file(
-          dir / "pairs" / (name + ".json"),
-          detail::pair_json(labels, plan.views[pr.a], plan.views[pr.b], names[pr.a], names[pr.b]),
-          -1);
+      writer.write_pair(
+          src.id, pair_name(to_string(system), pr.a, pr.b),
+          pair_json(labels, plan.views[pr.a], plan.views[pr.b], names[pr.a], names[pr.b]));
       t.writes += stage.lap();
     }
     record["systems"][to_string(system)] = {{"present", true},
@@ -592,7 +520,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                                             {"dense_labels", dense_total}};
   }
   stage.lap();
-  write_json_file(dir / "centerlines.json", to_json(all), -1);
+  writer.write_centerlines(src.id, to_json(all));
   t.writes += stage.lap();
   record["status"] = "ok";
   t.total = whole.lap();
@@ -602,10 +530,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   timing_file["note"] =
       "wall-clock seconds of the run that made this patient; they vary run to "
       "run (docs/dataset.md)";
-  write_json_file(dir / "timings.json", timing_file);
+  writer.write_timings(src.id, timing_file);
   nlohmann::json stored = record;
   stored["run"] = patient_run(src, o);
-  write_json_file(dir / "done.json", stored);
+  writer.write_done_record(src.id, stored);
   if (timings) *timings = t;
   return record;
 }

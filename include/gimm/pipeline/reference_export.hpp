@@ -49,6 +49,8 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/image.hpp"
+#include "gimm/dataset/layout.hpp"
+#include "gimm/dataset/reader.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
@@ -236,14 +238,6 @@ inline Image<Rgb8> read_ref_image(const std::filesystem::path& path, const Camer
   return out;
 }
 
-/// Column of `name` in the pair file's dense_fields.
-inline std::size_t ref_dense_column(const nlohmann::json& fields, const char* name,
-                                    const std::string& where) {
-  for (std::size_t k = 0; k < fields.size(); ++k)
-    if (fields[k].is_string() && fields[k].get<std::string>() == name) return k;
-  GIMM_FAIL(where << ": 'dense_fields' has no '" << name << "', got " << fields.dump());
-}
-
 }  // namespace detail
 
 /// Converts the finished gimm dataset in `dataset_dir` (manifest.json, patients/<id>/...)
@@ -255,16 +249,15 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   namespace fs = std::filesystem;
   namespace rf = reference_format;
   using nlohmann::json;
-  const fs::path manifest_path = dataset_dir / "manifest.json";
+  const DatasetLayout layout(dataset_dir);
+  const fs::path manifest_path = layout.manifest();
   GIMM_CHECK_AS(IoError, fs::exists(manifest_path),
                 "export_reference: '" << manifest_path.string()
                                       << "' does not exist (a sharded run needs 'gimm-dataset "
                                          "merge' first)");
   const json manifest = read_json_file(manifest_path);
   const std::string mwhere = manifest_path.string();
-  const std::string format = detail::ref_string(manifest, "format", mwhere);
-  GIMM_CHECK_AS(FormatError, format == "gimm-dataset/1",
-                mwhere << ": 'format' must be \"gimm-dataset/1\", got \"" << format << "\"");
+  check_dataset_format(manifest, mwhere);
   const json& patients = detail::ref_field(manifest, "patients", mwhere);
   GIMM_CHECK_AS(FormatError, patients.is_array(),
                 mwhere << ": 'patients' must be an array, got " << patients.type_name());
@@ -299,8 +292,8 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
     const std::string split = record["split"].get<std::string>();
     const std::string token = rf::patient_token(id, pwhere);
 
-    const fs::path pdir = dataset_dir / "patients" / id;
-    const fs::path pairs_dir = pdir / "pairs";
+    const fs::path views_dir = layout.views_dir(id);
+    const fs::path pairs_dir = layout.pairs_dir(id);
     GIMM_CHECK_AS(IoError, fs::is_directory(pairs_dir),
                   pwhere << ": '" << pairs_dir.string() << "' does not exist");
     std::vector<fs::path> pair_files;
@@ -321,10 +314,10 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
       p.labels = read_json_file(file);
       const std::string va = detail::ref_view_name(p.labels, "view_a", where);
       const std::string vb = detail::ref_view_name(p.labels, "view_b", where);
-      p.a = detail::read_ref_view(pdir / "views", va,
-                                  detail::ref_int(p.labels, "view_class_a", where), where);
-      p.b = detail::read_ref_view(pdir / "views", vb,
-                                  detail::ref_int(p.labels, "view_class_b", where), where);
+      p.a = detail::read_ref_view(views_dir, va, detail::ref_int(p.labels, "view_class_a", where),
+                                  where);
+      p.b = detail::read_ref_view(views_dir, vb, detail::ref_int(p.labels, "view_class_b", where),
+                                  where);
       GIMM_CHECK_AS(FormatError, p.a.system == p.b.system && p.a.view_class != p.b.view_class,
                     where << ": a pair needs two view classes of one system, got " << p.a.system
                           << " '" << p.a.view_name << "' and " << p.b.system << " '"
@@ -352,7 +345,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
       const std::string file_b = rf::image_name(token, name, 'B');
       for (const auto& [view, file] :
            {std::pair<const detail::RefView*, std::string>{&p.a, file_a}, {&p.b, file_b}}) {
-        const fs::path src = pdir / "views" / view->file;
+        const fs::path src = views_dir / view->file;
         write_png(out_dir / "images" / file,
                   detail::read_ref_image(src.string() + ".png", view->camera, false));
         write_png(out_dir / "masks" / file,
@@ -360,32 +353,12 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
       }
 
       // Dense rows -> index-aligned 2D/3D lists; sparse indices -> per-image landmarks.
-      const json& fields = detail::ref_field(p.labels, "dense_fields", where);
-      GIMM_CHECK_AS(FormatError, fields.is_array(),
-                    where << ": 'dense_fields' must be an array, got " << fields.dump());
-      std::size_t col[7];
-      const char* names[7] = {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm"};
-      for (int k = 0; k < 7; ++k) col[k] = detail::ref_dense_column(fields, names[k], where);
-      const json& dense = detail::ref_field(p.labels, "dense", where);
-      GIMM_CHECK_AS(FormatError, dense.is_array(),
-                    where << ": 'dense' must be an array, got " << dense.type_name());
+      const std::vector<Correspondence> dense = dense_labels_from_json(p.labels, where);
       json pts_a = json::array(), pts_b = json::array(), pts_3d = json::array();
-      for (std::size_t r = 0; r < dense.size(); ++r) {
-        const json& row = dense[r];
-        GIMM_CHECK_AS(FormatError, row.is_array() && row.size() == fields.size(),
-                      where << ": dense row " << r << " must hold " << fields.size()
-                            << " numbers, got " << row.dump());
-        double v[7];
-        for (int k = 0; k < 7; ++k) {
-          const json& x = row[col[k]];
-          GIMM_CHECK_AS(FormatError, x.is_number() && std::isfinite(x.get<double>()),
-                        where << ": dense row " << r << ", '" << names[k]
-                              << "' must be a finite number, got " << x.dump());
-          v[k] = x.get<double>();
-        }
-        pts_a.push_back({v[0], v[1]});
-        pts_b.push_back({v[2], v[3]});
-        pts_3d.push_back({v[4], v[5], v[6]});
+      for (const Correspondence& c : dense) {
+        pts_a.push_back({c.a.x(), c.a.y()});
+        pts_b.push_back({c.b.x(), c.b.y()});
+        pts_3d.push_back({c.world.x(), c.world.y(), c.world.z()});
       }
       const json& sparse = detail::ref_field(p.labels, "sparse", where);
       GIMM_CHECK_AS(FormatError, sparse.is_array(),

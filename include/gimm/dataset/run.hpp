@@ -1,0 +1,205 @@
+#pragma once
+/// Running a dataset in pieces: which shard a process is, the temporaries a killed run leaves,
+/// whether a finished patient was made with the same parameters, and merging shard manifests.
+/// Patient k (in id order) belongs to shard k mod N; a killed run started again skips finished
+/// patients (their done.json), so any interleaving of kills, restarts and shards ends with the
+/// same tree as one uninterrupted run (timings.json aside).
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+#include "gimm/dataset/layout.hpp"
+#include "gimm/dataset/reader.hpp"
+#include "gimm/dataset/writer.hpp"
+#include "gimm/io/files.hpp"
+
+namespace gimm {
+
+namespace detail {
+inline int parse_shard_int(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  int value = 0;
+  try {
+    value = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  GIMM_CHECK(used == text.size() && !text.empty(),
+             what << " must be an integer, got '" << text << "'");
+  return value;
+}
+
+inline std::string env_or_empty(const char* name) {
+  const char* v = std::getenv(name);
+  return v ? v : "";
+}
+}  // namespace detail
+
+/// This process's shard: `flag` ("I/N") if given, else SLURM_ARRAY_TASK_ID (minus
+/// SLURM_ARRAY_TASK_MIN) of SLURM_ARRAY_TASK_COUNT, else JOB_COMPLETION_INDEX (Kubernetes
+/// Indexed Job) of GIMM_SHARD_COUNT, else 0 of 1.
+inline Shard resolve_shard(const std::string& flag) {
+  using detail::env_or_empty;
+  using detail::parse_shard_int;
+  Shard s;
+  if (!flag.empty()) {
+    const auto slash = flag.find('/');
+    GIMM_CHECK(slash != std::string::npos, "--shard must be I/N, got '" << flag << "'");
+    s.index = parse_shard_int(flag.substr(0, slash), "--shard index");
+    s.count = parse_shard_int(flag.substr(slash + 1), "--shard count");
+  } else if (!env_or_empty("SLURM_ARRAY_TASK_ID").empty()) {
+    s.index = parse_shard_int(env_or_empty("SLURM_ARRAY_TASK_ID"), "SLURM_ARRAY_TASK_ID");
+    GIMM_CHECK(!env_or_empty("SLURM_ARRAY_TASK_COUNT").empty(),
+               "SLURM_ARRAY_TASK_ID is set but SLURM_ARRAY_TASK_COUNT is not");
+    s.count = parse_shard_int(env_or_empty("SLURM_ARRAY_TASK_COUNT"), "SLURM_ARRAY_TASK_COUNT");
+    const std::string min = env_or_empty("SLURM_ARRAY_TASK_MIN");
+    if (!min.empty()) s.index -= parse_shard_int(min, "SLURM_ARRAY_TASK_MIN");
+  } else if (!env_or_empty("JOB_COMPLETION_INDEX").empty()) {
+    s.index = parse_shard_int(env_or_empty("JOB_COMPLETION_INDEX"), "JOB_COMPLETION_INDEX");
+    GIMM_CHECK(!env_or_empty("GIMM_SHARD_COUNT").empty(),
+               "JOB_COMPLETION_INDEX is set but GIMM_SHARD_COUNT is not");
+    s.count = parse_shard_int(env_or_empty("GIMM_SHARD_COUNT"), "GIMM_SHARD_COUNT");
+  }
+  GIMM_CHECK(s.count >= 1 && s.index >= 0 && s.index < s.count,
+             "shard " << s.index << "/" << s.count << " is out of range (need 0 <= I < N)");
+  return s;
+}
+
+/// A killed run can leave "<file>.tmp.<host>.<pid>" behind (write_file_atomic's temporaries);
+/// they are never read, and removing them makes a resumed tree equal to an uninterrupted one.
+/// Only under `dir` and only files this process would write: other shards may be writing theirs
+/// into the same output folder right now. A prefix names top-level outputs only; without one,
+/// the whole folder (a patient's) is swept.
+inline void remove_stale_temporaries(const std::filesystem::path& dir,
+                                     const std::string& name_prefix = "") {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) return;
+  std::vector<fs::path> stale;
+  const auto is_stale = [&](const fs::path& p) {
+    const std::string name = p.filename().string();
+    return name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
+  };
+  const auto scan = [&](auto entries) {
+    for (const auto& e : entries)
+      if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
+  };
+  if (name_prefix.empty())
+    scan(fs::recursive_directory_iterator(dir));
+  else
+    scan(fs::directory_iterator(dir));
+  for (const auto& p : stale) fs::remove(p);
+}
+
+/// The outputs written once per run (not per patient): the manifest, and when not sharded the
+/// splits and the reference export.
+inline void remove_stale_run_temporaries(const DatasetLayout& layout, const Shard& shard) {
+  remove_stale_temporaries(layout.root(), layout.manifest(shard).filename().string() + ".tmp.");
+  if (shard.sharded()) return;
+  remove_stale_temporaries(layout.splits_dir());
+  remove_stale_temporaries(layout.reference_dir());
+}
+
+/// The first difference between two JSON values, as "path: stored there, wanted here"; empty
+/// when they are equal.
+inline std::string first_json_difference(const nlohmann::json& stored,
+                                         const nlohmann::json& wanted) {
+  const nlohmann::json patch = nlohmann::json::diff(stored, wanted);
+  if (patch.empty()) return "";
+  const std::string path = patch[0].at("path").get<std::string>();
+  const nlohmann::json::json_pointer pointer(path);
+  const std::string was = stored.contains(pointer) ? stored.at(pointer).dump() : "(none)";
+  const std::string now = wanted.contains(pointer) ? wanted.at(pointer).dump() : "(none)";
+  return path + ": " + was + " there, " + now + " here";
+}
+
+/// The record of a finished patient (its done.json without "run"), or null when it is not
+/// finished. Its stale temporaries are removed either way. Throws when it was made with other
+/// parameters than `run` (the manifest would describe files this run did not make).
+inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::string& patient,
+                                       const nlohmann::json& run) {
+  namespace fs = std::filesystem;
+  const fs::path dir = layout.patient_dir(patient);
+  remove_stale_temporaries(dir);
+  if (!fs::exists(layout.done_record(patient))) return nullptr;
+  nlohmann::json record = read_json_file(layout.done_record(patient));
+  const nlohmann::json stored = record.value("run", nlohmann::json());
+  record.erase("run");
+  const std::string difference = first_json_difference(stored, run);
+  GIMM_CHECK(difference.empty(), "gimm-dataset: '"
+                                     << dir.string() << "' was made with other parameters ("
+                                     << difference << "); use another --out, or the parameters "
+                                     << "it was made with");
+  return record;
+}
+
+/// Joins the shard manifests of `root` into manifest.json and writes the splits; removes the
+/// shard manifests. They must all be of one run: the same parameters, input and shard count,
+/// every shard present once. `check(patients)`, if given, runs before anything is written (e.g.
+/// that an export can name every patient).
+struct MergedShards {
+  nlohmann::json manifest;
+  std::size_t shards = 0;
+};
+
+inline MergedShards merge_shards(
+    const std::filesystem::path& root,
+    const std::function<void(const nlohmann::json& patients)>& check = {}) {
+  namespace fs = std::filesystem;
+  GIMM_CHECK(fs::is_directory(root), "merge: '" << root.string() << "' is not a directory");
+  const DatasetLayout layout(root);
+  remove_stale_run_temporaries(layout, Shard{});
+  std::vector<fs::path> shards;
+  for (const auto& e : fs::directory_iterator(root)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(DatasetLayout::kShardManifestPrefix, 0) == 0 &&
+        name.find(".tmp.") == std::string::npos)
+      shards.push_back(e.path());
+  }
+  GIMM_CHECK(!shards.empty(), "merge: no manifest.shard-*.json in '" << root.string() << "'");
+  std::sort(shards.begin(), shards.end());
+  nlohmann::json merged, patients = nlohmann::json::array();
+  int count = -1;
+  std::vector<int> seen;
+  for (const auto& path : shards) {
+    const auto m = read_json_file(path);
+    check_dataset_format(m, path.string());
+    if (merged.is_null()) merged = m;
+    GIMM_CHECK(m.at("parameters") == merged.at("parameters") && m.at("input") == merged.at("input"),
+               "merge: '" << path.string() << "' was made with other parameters than '"
+                          << shards[0].string() << "'");
+    const int this_count = m.at("shard").at("count").get<int>();
+    GIMM_CHECK(count < 0 || this_count == count,
+               "merge: '" << path.string() << "' is a shard of " << this_count << ", '"
+                          << shards[0].string() << "' of " << count
+                          << " (a stale manifest of another sharding? remove it)");
+    count = this_count;
+    const int index = m.at("shard").at("index").get<int>();
+    GIMM_CHECK(std::find(seen.begin(), seen.end(), index) == seen.end(),
+               "merge: shard " << index << " appears twice in '" << root.string() << "'");
+    seen.push_back(index);
+    for (const auto& p : m.at("patients")) patients.push_back(p);
+  }
+  std::sort(seen.begin(), seen.end());
+  for (int i = 0; i < count; ++i)
+    GIMM_CHECK(
+        std::binary_search(seen.begin(), seen.end(), i),
+        "merge: shard " << i << " of " << count << " is missing in '" << root.string() << "'");
+  std::sort(patients.begin(), patients.end(), [](const auto& a, const auto& b) {
+    return a["id"].template get<std::string>() < b["id"].template get<std::string>();
+  });
+  if (check) check(patients);
+  merged["patients"] = patients;
+  merged.erase("shard");
+  const DatasetWriter writer(root);
+  writer.write_manifest(merged);
+  writer.write_splits(patients);
+  for (const auto& path : shards) fs::remove(path);
+  return {merged, shards.size()};
+}
+
+}  // namespace gimm

@@ -1,0 +1,160 @@
+#pragma once
+/// The one writer of a gimm dataset (layout.hpp): the JSON of views, pairs and records, and the
+/// files, each written atomically (io/files.hpp), so a reader never sees half a file and a
+/// killed run leaves only temporaries, which the run removes (run.hpp).
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "gimm/anatomy/components.hpp"
+#include "gimm/core/image.hpp"
+#include "gimm/dataset/layout.hpp"
+#include "gimm/io/camera_json.hpp"
+#include "gimm/io/files.hpp"
+#include "gimm/io/png.hpp"
+#include "gimm/labels/correspondence.hpp"
+#include "gimm/labels/protocol.hpp"
+
+namespace gimm {
+
+/// "RCA_03": the name of view `index` of a coronary system.
+inline std::string view_name(const std::string& system, std::size_t index) {
+  return system + "_" + (index < 10 ? "0" : "") + std::to_string(index);
+}
+
+/// "RCA_03-07": the pair of views a and b of one system.
+inline std::string pair_name(const std::string& system, std::size_t a, std::size_t b) {
+  return view_name(system, a) + "-" + (b < 10 ? "0" : "") + std::to_string(b);
+}
+
+/// Every centerline point of the system in one view (column arrays, in the order of
+/// centerlines.json's branches and points).
+inline nlohmann::json view_points_json(const std::vector<LabelPoint>& points,
+                                       const std::vector<ProjectedPoint>& view) {
+  nlohmann::json u = nlohmann::json::array(), v = u, depth = u, in_image = u, on_mask = u,
+                 overlap = u, visible = u, branch = u, index = u;
+  for (std::size_t n = 0; n < points.size(); ++n) {
+    u.push_back(view[n].uv.x());
+    v.push_back(view[n].uv.y());
+    depth.push_back(view[n].depth);
+    in_image.push_back(view[n].in_image ? 1 : 0);
+    on_mask.push_back(view[n].on_mask ? 1 : 0);
+    overlap.push_back(view[n].overlap);
+    visible.push_back(view[n].visible ? 1 : 0);
+    branch.push_back(points[n].branch);
+    index.push_back(points[n].index);
+  }
+  return {{"u", u},
+          {"v", v},
+          {"depth_mm", depth},
+          {"in_image", in_image},
+          {"on_mask", on_mask},
+          {"overlap", overlap},
+          {"visible", visible},
+          {"branch", branch},
+          {"point", index}};
+}
+
+/// A pair file: views, classes, F, dense labels (columns named in dense_fields, the reader's
+/// rule) and the sparse label indices.
+inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
+                                const SampledView& b, const std::string& name_a,
+                                const std::string& name_b) {
+  nlohmann::json dense = nlohmann::json::array();
+  for (const auto& c : labels.dense)
+    dense.push_back({c.a.x(), c.a.y(), c.b.x(), c.b.y(), c.world.x(), c.world.y(), c.world.z(),
+                     c.branch, c.index, c.radius});
+  return {{"view_a", name_a},
+          {"view_b", name_b},
+          {"view_class_a", a.view_class},
+          {"view_class_b", b.view_class},
+          {"F", gimm::detail::matrix_to_json(labels.F)},
+          {"F_convention", "x_b^T F x_a = 0, pixels"},
+          {"dense_fields",
+           {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm", "branch", "point", "radius_mm"}},
+          {"dense", dense},
+          {"sparse", labels.sparse}};
+}
+
+/// What the LCA/RCA split kept of the label: every component, and the voxels and components left
+/// in neither system (specks, trees beyond the two largest). Deterministic, so part of the
+/// record.
+inline nlohmann::json label_json(const CoronarySplit& split) {
+  const int kept = (split.lca_voxels > 0 ? 1 : 0) + (split.rca_voxels > 0 ? 1 : 0);
+  return {{"voxels", split.label_voxels},
+          {"components", split.components},
+          {"dropped_components", split.components - kept},
+          {"dropped_voxels", split.dropped_voxels},
+          {"dropped_fraction", split.dropped_fraction()}};
+}
+
+/// One view's contents as they go to disk.
+struct ViewFiles {
+  Image<std::uint16_t> image;                    ///< the angiogram, 16-bit
+  Image<std::uint8_t> mask;                      ///< nonzero = vessel (written 0/255)
+  const Image<std::uint8_t>* overlap = nullptr;  ///< vessel passages per pixel (mesh mode)
+  nlohmann::json camera;                         ///< camera, view class, angles
+  nlohmann::json points;                         ///< view_points_json
+};
+
+class DatasetWriter {
+ public:
+  explicit DatasetWriter(std::filesystem::path root) : layout_(std::move(root)) {}
+  const DatasetLayout& layout() const { return layout_; }
+
+  /// The patient's views/ and pairs/ folders.
+  void create_patient(const std::string& patient) const {
+    std::filesystem::create_directories(layout_.views_dir(patient));
+    std::filesystem::create_directories(layout_.pairs_dir(patient));
+  }
+
+  void write_view(const std::string& patient, const std::string& view, ViewFiles files) const {
+    const std::string stem = layout_.view_stem(patient, view).string();
+    write_png(stem + ".png", files.image);
+    for (auto& px : files.mask.storage()) px = px ? 255 : 0;
+    write_png(stem + ".mask.png", files.mask);
+    if (files.overlap) write_png(stem + ".overlap.png", *files.overlap);
+    write_json_file(stem + ".camera.json", files.camera);
+    write_json_file(stem + ".points.json", files.points, -1);
+  }
+
+  void write_pair(const std::string& patient, const std::string& pair,
+                  const nlohmann::json& labels) const {
+    write_json_file(layout_.pair_labels(patient, pair), labels, -1);
+  }
+
+  void write_centerlines(const std::string& patient, const nlohmann::json& centerlines) const {
+    write_json_file(layout_.centerlines(patient), centerlines, -1);
+  }
+
+  void write_timings(const std::string& patient, const nlohmann::json& timings) const {
+    write_json_file(layout_.timings(patient), timings);
+  }
+
+  /// Written last: its presence means the patient is complete (resume skips it).
+  void write_done_record(const std::string& patient, const nlohmann::json& record) const {
+    write_json_file(layout_.done_record(patient), record);
+  }
+
+  void write_manifest(const nlohmann::json& manifest, const Shard& shard = {}) const {
+    write_json_file(layout_.manifest(shard), manifest);
+  }
+
+  /// splits/{train,val,test}.txt: the ids of the "ok" patients of each split, in record order.
+  void write_splits(const nlohmann::json& patients) const {
+    std::filesystem::create_directories(layout_.splits_dir());
+    for (const char* split : {"train", "val", "test"}) {
+      std::string text;
+      for (const auto& p : patients)
+        if (p.value("status", "") == "ok" && p.value("split", "") == split)
+          text += p["id"].get<std::string>() + "\n";
+      write_file_atomic(layout_.split_list(split), text);
+    }
+  }
+
+ private:
+  DatasetLayout layout_;
+};
+
+}  // namespace gimm

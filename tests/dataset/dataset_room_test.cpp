@@ -1,0 +1,141 @@
+// The dataset room: one layout, one reader rule for dense columns (by name, checked against
+// dense_fields), the manifest's format, and merging shard manifests.
+#include <catch2/catch.hpp>
+#include <filesystem>
+
+#include "gimm/dataset/layout.hpp"
+#include "gimm/dataset/reader.hpp"
+#include "gimm/dataset/run.hpp"
+#include "gimm/dataset/writer.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+fs::path fresh(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("gimm_dataset_room_" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+json pair_with(json fields, json dense) {
+  return {{"view_a", "LCA_00"},
+          {"view_b", "LCA_01"},
+          {"view_class_a", 1},
+          {"view_class_b", 2},
+          {"F", {{0, 0, 0}, {0, 0, -1}, {0, 1, 0}}},
+          {"dense_fields", fields},
+          {"dense", dense},
+          {"sparse", json::array()}};
+}
+}  // namespace
+
+TEST_CASE("Dataset layout: every path from one place", "[dataset]") {
+  const gimm::DatasetLayout l("/d");
+  CHECK(l.manifest() == fs::path("/d/manifest.json"));
+  CHECK(l.manifest({1, 3}) == fs::path("/d/manifest.shard-1-of-3.json"));
+  CHECK(l.split_list("val") == fs::path("/d/splits/val.txt"));
+  CHECK(l.view_image("p", "RCA_02") == fs::path("/d/patients/p/views/RCA_02.png"));
+  CHECK(l.view_mask("p", "RCA_02") == fs::path("/d/patients/p/views/RCA_02.mask.png"));
+  CHECK(l.view_camera("p", "RCA_02") == fs::path("/d/patients/p/views/RCA_02.camera.json"));
+  CHECK(l.pair_labels("p/RCA_00-02") == fs::path("/d/patients/p/pairs/RCA_00-02.json"));
+  CHECK(l.done_record("p") == fs::path("/d/patients/p/done.json"));
+  CHECK(gimm::view_name("LCA", 3) == "LCA_03");
+  CHECK(gimm::pair_name("LCA", 3, 10) == "LCA_03-10");
+  CHECK_THROWS_WITH(gimm::split_pair_id("nopatient"), Catch::Contains("'nopatient'"));
+  CHECK_THROWS_WITH(gimm::split_pair_id("a/b/c"), Catch::Contains("'a/b/c'"));
+}
+
+TEST_CASE("Dataset reader: dense columns are found by name", "[dataset]") {
+  // The columns in another order than the writer's, with an extra one: read by name.
+  const json fields = {"x_mm", "y_mm", "z_mm", "extra", "u_b", "v_b", "u_a", "v_a", "point"};
+  const json j = pair_with(fields, {{5, 6, 7, 99, 3, 4, 1, 2, 11}});
+  const gimm::PairTruth t = gimm::pair_truth_from_json(j, "p/LCA_00-01", "here.json");
+  REQUIRE(t.dense.size() == 1);
+  CHECK(t.dense[0].a == Eigen::Vector2d(1, 2));
+  CHECK(t.dense[0].b == Eigen::Vector2d(3, 4));
+  CHECK(t.dense[0].world == Eigen::Vector3d(5, 6, 7));
+  CHECK(t.dense[0].index == 11);
+
+  CHECK_THROWS_WITH(
+      gimm::pair_truth_from_json(pair_with({"u_a", "v_a"}, json::array()), "p/x", "here.json"),
+      Catch::Contains("here.json") && Catch::Contains("no 'u_b'"));
+  CHECK_THROWS_WITH(gimm::dense_labels_from_json(pair_with(fields, {{1, 2, 3}}), "here.json"),
+                    Catch::Contains("dense row 0 must hold 9 numbers"));
+  CHECK_THROWS_WITH(
+      gimm::dense_labels_from_json(pair_with(fields, {{5, 6, 7, 0, 3, 4, "x", 2, 1}}), "h.json"),
+      Catch::Contains("'u_a' must be a finite number"));
+  json no_fields = pair_with(fields, json::array());
+  no_fields.erase("dense_fields");
+  CHECK_THROWS_WITH(gimm::dense_labels_from_json(no_fields, "h.json"),
+                    Catch::Contains("h.json") && Catch::Contains("dense_fields"));
+}
+
+TEST_CASE("Dataset reader: the manifest's format is checked", "[dataset]") {
+  const fs::path root = fresh("format");
+  fs::create_directories(root / "patients");
+  gimm::write_json_file(root / "manifest.json", {{"patients", json::array()}});
+  CHECK_THROWS_WITH(gimm::DatasetReader(root), Catch::Contains("no 'format'"));
+  gimm::write_json_file(root / "manifest.json",
+                        {{"format", "gimm-dataset/2"}, {"patients", json::array()}});
+  CHECK_THROWS_WITH(gimm::DatasetReader(root), Catch::Contains("\"gimm-dataset/2\" is not"));
+  gimm::write_json_file(root / "manifest.json",
+                        {{"format", gimm::kDatasetFormat}, {"patients", json::array()}});
+  CHECK(gimm::DatasetReader(root).pair_ids().empty());
+}
+
+TEST_CASE("Dataset merge: shards of one run only", "[dataset]") {
+  const fs::path root = fresh("merge");
+  const gimm::DatasetWriter writer(root);
+  const auto shard_manifest = [&](int index, int count, const std::string& id) {
+    writer.write_manifest({{"format", gimm::kDatasetFormat},
+                           {"parameters", {{"seed", 0}}},
+                           {"input", {{"phantom", 3}}},
+                           {"shard", {{"index", index}, {"count", count}}},
+                           {"patients", {{{"id", id}, {"status", "ok"}, {"split", "train"}}}}},
+                          {index, count});
+  };
+  shard_manifest(0, 2, "a");
+  shard_manifest(1, 2, "b");
+  shard_manifest(2, 3, "c");  // stale, of another sharding: would list a patient twice
+  CHECK_THROWS_WITH(gimm::merge_shards(root), Catch::Contains("a shard of 3") &&
+                                                  Catch::Contains("a shard of") &&
+                                                  Catch::Contains("another sharding"));
+  CHECK(fs::exists(root / "manifest.shard-0-of-2.json"));  // nothing removed on failure
+  CHECK_FALSE(fs::exists(root / "manifest.json"));
+  fs::remove(root / "manifest.shard-2-of-3.json");
+  // A temporary of a killed shard writer is not a shard.
+  gimm::write_file_atomic(root / "x.txt", std::string("x"));
+  fs::rename(root / "x.txt", root / "manifest.shard-1-of-2.json.tmp.host.1");
+  const gimm::MergedShards merged = gimm::merge_shards(root);
+  CHECK(merged.shards == 2);
+  CHECK(merged.manifest.at("patients").size() == 2);
+  CHECK_FALSE(merged.manifest.contains("shard"));
+  CHECK(gimm::read_json_file(root / "manifest.json") == merged.manifest);
+  const auto split = gimm::read_file_bytes(root / "splits" / "train.txt");
+  CHECK(std::string(split.begin(), split.end()) == "a\nb\n");
+  CHECK_FALSE(fs::exists(root / "manifest.shard-0-of-2.json"));
+}
+
+TEST_CASE("Dataset run: a finished patient made with other parameters is refused", "[dataset]") {
+  const fs::path root = fresh("resume");
+  const gimm::DatasetLayout layout(root);
+  fs::create_directories(layout.patient_dir("p"));
+  CHECK(gimm::finished_patient(layout, "p", {{"seed", 1}}).is_null());
+  gimm::write_json_file(layout.done_record("p"), {{"id", "p"}, {"run", {{"seed", 1}}}});
+  gimm::write_file_atomic(layout.patient_dir("p") / "t.txt", std::string("x"));
+  fs::rename(layout.patient_dir("p") / "t.txt", layout.patient_dir("p") / "a.json.tmp.h.2");
+  CHECK(gimm::finished_patient(layout, "p", {{"seed", 1}}) == json{{"id", "p"}});
+  CHECK_FALSE(fs::exists(layout.patient_dir("p") / "a.json.tmp.h.2"));  // swept
+  CHECK_THROWS_WITH(gimm::finished_patient(layout, "p", {{"seed", 2}}),
+                    Catch::Contains("/seed: 1 there, 2 here"));
+}
+
+TEST_CASE("Dataset shard: flags and job-array indices", "[dataset]") {
+  CHECK(gimm::resolve_shard("1/3").index == 1);
+  CHECK(gimm::resolve_shard("1/3").count == 3);
+  CHECK_THROWS_WITH(gimm::resolve_shard("3/3"), Catch::Contains("out of range"));
+  CHECK_THROWS_WITH(gimm::resolve_shard("x/3"), Catch::Contains("'x'"));
+  CHECK_THROWS_WITH(gimm::resolve_shard("2"), Catch::Contains("I/N"));
+}
