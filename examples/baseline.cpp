@@ -1,14 +1,16 @@
-// gimm-baseline: training-free matchers written in the predictions format of gimm-eval.
+// gimm-baseline: training-free matchers written in the predictions format of gimm-eval (the same
+// as gimm-match --dataset DIR --method oracle|epipolar).
 //   gimm-baseline --dataset DIR --method oracle|epipolar --out PRED_DIR [--sigma PX] [--seed S]
 //                 [--split all|train|val|test] [--max-points N]
 // oracle: the dense GT labels with N(0, sigma^2) pixel noise on the B side; epipolar: vessel
 // pixels of A matched to the nearest vessel crossing of the exact epipolar line in B
-// (include/gimm/metrics/baselines.hpp). One file per pair: PRED_DIR/<patient>/<pair>.json.
+// (include/gimm/match/baselines.hpp). One file per pair: PRED_DIR/<patient>/<pair>.json.
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "cli_common.hpp"
-#include "gimm/metrics/baselines.hpp"
+#include "gimm/match/baselines.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-baseline: oracle and exact-epipolar baseline matches for gimm-eval"};
@@ -32,15 +34,21 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
     GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+    std::unique_ptr<gimm::PairMatcher> matcher;
+    if (method == "oracle")
+      matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
+    else
+      matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
     gimm::DatasetReader reader(dataset);
     const auto ids = reader.pair_ids(split);
     GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
     std::size_t matches = 0;
     for (const auto& id : ids) {
       const gimm::PairTruth truth = reader.pair(id);
-      gimm::Rng rng = gimm::Rng(seed).fork(gimm::fnv1a(method + ":" + id));
-      const gimm::PairMatches m = method == "oracle" ? gimm::oracle_matches(truth, sigma, rng)
-                                                     : gimm::epipolar_matches(truth, epi, rng);
+      gimm::PairInput input;
+      input.id = id;
+      input.truth = &truth;
+      const gimm::PairMatches m = matcher->match(input);
       matches += m.size();
       gimm::write_matches(gimm::matches_path(out, id), m);
     }

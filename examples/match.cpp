@@ -1,21 +1,25 @@
-// gimm-match: matches coronary points between two angiograms with the GIMM matcher.
+// gimm-match: matches coronary points between two angiograms (the GIMM matcher, or the
+// training-free baselines in dataset mode).
 //   gimm-match --image-a A.png --image-b B.png --weights W.safetensors
 //              [--class-a ID --class-b ID] [--camera-a A.json --camera-b B.json]
 //              [--gate hard|soft|logit|none] [--tau PX] [--delta PX] [--input-size N]
 //              [--pair ID] [--out matches.json] [--picture pair.png]
 //   gimm-match --dataset DIR --weights W.safetensors --out PRED_DIR [--split all|train|val|test]
 //              [--geometry cameras|matches] [--gate ...]
+//   gimm-match --dataset DIR --method epipolar|oracle --out PRED_DIR [--sigma PX] [--seed S]
+//              [--max-points N]
 // Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores. The
 // dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
 // from the views unless --geometry matches, which estimates F from the matches as the
 // reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line.
 // Images: 8- or 16-bit PNG, grey or colour (converted to grey), the same size; see
-// include/gimm/pipeline/matching.hpp for padding, resizing and where F comes from.
+// include/gimm/match/learned.hpp for padding, resizing and where F comes from.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "cli_common.hpp"
@@ -23,9 +27,9 @@
 #include "gimm/io/files.hpp"
 #include "gimm/io/matcher_file.hpp"
 #include "gimm/io/png.hpp"
-#include "gimm/metrics/matches.hpp"
-#include "gimm/metrics/truth.hpp"
-#include "gimm/pipeline/matching.hpp"
+#include "gimm/match/baselines.hpp"
+#include "gimm/match/learned.hpp"
+#include "gimm/match/matches.hpp"
 
 namespace {
 
@@ -67,9 +71,8 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
 }
 
 /// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
-int match_dataset(const gimm::nn::Matcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, const gimm::MatchOptions& options,
-                  const std::string& out) {
+int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
+                  const std::string& split, bool use_cameras, const std::string& out) {
   gimm::DatasetReader reader(dataset);
   const auto ids = reader.pair_ids(split);
   GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
@@ -79,17 +82,25 @@ int match_dataset(const gimm::nn::Matcher& matcher, const std::string& dataset,
     const gimm::PairTruth truth = reader.pair(ids[n]);
     const std::string patient = gimm::split_pair_id(ids[n]).first;
     const gimm::DatasetLayout& layout = reader.layout();
-    auto camera = [&](const std::string& view) -> std::optional<gimm::Camerad> {
-      if (!use_cameras) return std::nullopt;
-      return reader.camera(patient, view);
-    };
-    gimm::PairMatchResult result = gimm::match_pair(
-        matcher, gimm::read_png_unit(layout.view_image(patient, truth.view_a)),
-        gimm::read_png_unit(layout.view_image(patient, truth.view_b)), truth.view_class_a,
-        truth.view_class_b, camera(truth.view_a), camera(truth.view_b), options);
-    result.matches.pair = ids[n];
-    gimm::write_matches(gimm::matches_path(out, ids[n]), result.matches);
-    total += result.matches.size();
+    gimm::PairInput input;
+    input.id = ids[n];
+    input.class_a = truth.view_class_a;
+    input.class_b = truth.view_class_b;
+    input.truth = &truth;
+    gimm::Image<float> a, b;
+    if (matcher.needs_images()) {
+      a = gimm::read_png_unit(layout.view_image(patient, truth.view_a));
+      b = gimm::read_png_unit(layout.view_image(patient, truth.view_b));
+      input.image_a = &a;
+      input.image_b = &b;
+    }
+    if (use_cameras) {
+      input.camera_a = reader.camera(patient, truth.view_a);
+      input.camera_b = reader.camera(patient, truth.view_b);
+    }
+    const gimm::PairMatches matches = matcher.match(input);
+    gimm::write_matches(gimm::matches_path(out, ids[n]), matches);
+    total += matches.size();
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "\rgimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
@@ -107,7 +118,10 @@ int main(int argc, char** argv) {
   CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)"};
   app.failure_message(CLI::FailureMessage::help);
   std::string image_a, image_b, weights, camera_a, camera_b, gate = "hard", out, picture, pair;
-  std::string dataset, split = "all", geometry = "cameras";
+  std::string dataset, split = "all", geometry = "cameras", method = "learned";
+  double sigma = 1.0;
+  std::uint64_t seed = 0;
+  gimm::EpipolarBaselineOptions epi;
   int class_a = 0, class_b = 0, input_size = 0;
   gimm::MatchOptions options;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
@@ -120,9 +134,18 @@ int main(int argc, char** argv) {
   app.add_option("--geometry", geometry, "dataset mode: F from the view cameras or the matches")
       ->check(CLI::IsMember({"cameras", "matches"}))
       ->capture_default_str();
-  app.add_option("--weights", weights, "matcher weights, safetensors")
-      ->required()
+  app.add_option("--method", method,
+                 "learned (the GIMM network) | epipolar | oracle (training-free, dataset mode; "
+                 "match/matcher.hpp)")
+      ->check(CLI::IsMember({"learned", "epipolar", "oracle"}))
+      ->capture_default_str();
+  app.add_option("--weights", weights, "learned: matcher weights, safetensors")
       ->check(CLI::ExistingFile);
+  app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
+      ->capture_default_str();
+  app.add_option("--seed", seed, "oracle/epipolar: random seed")->capture_default_str();
+  app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
+      ->capture_default_str();
   app.add_option("--class-a", class_a, "view class of A: 1..11, 0 = unknown")
       ->capture_default_str();
   app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
@@ -155,9 +178,24 @@ int main(int argc, char** argv) {
                  "--dataset matches a whole dataset (classes and cameras from its files); it "
                  "takes no --image-a/b, --camera-a/b, --class-a/b, --pair or --picture");
       GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
-      return match_dataset(gimm::io::load_matcher(weights), dataset, split, geometry == "cameras",
-                           options, out);
+      std::unique_ptr<gimm::PairMatcher> matcher;
+      if (method == "learned") {
+        GIMM_CHECK(!weights.empty(), "--method learned needs --weights W.safetensors");
+        matcher = std::make_unique<gimm::LearnedMatcher>(gimm::io::load_matcher(weights), options);
+      } else {
+        GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
+        GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+        if (method == "oracle")
+          matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
+        else
+          matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
+      }
+      return match_dataset(*matcher, dataset, split, geometry == "cameras", out);
     }
+    GIMM_CHECK(method == "learned", "--method " << method
+                                                << " matches a dataset's pairs (it needs their "
+                                                   "masks or labels): give --dataset DIR");
+    GIMM_CHECK(!weights.empty(), "--method learned needs --weights W.safetensors");
     GIMM_CHECK(!image_a.empty() && !image_b.empty(),
                "give --image-a and --image-b (or --dataset DIR)");
     const gimm::nn::Matcher matcher = gimm::io::load_matcher(weights);

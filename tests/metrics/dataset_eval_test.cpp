@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "gimm/metrics/baselines.hpp"
+#include "gimm/match/baselines.hpp"
 #include "gimm/metrics/summary.hpp"
 #include "gimm/pipeline/dataset.hpp"
 

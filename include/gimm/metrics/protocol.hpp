@@ -28,7 +28,7 @@
 
 #include "gimm/core/image.hpp"
 #include "gimm/geometry/epipolar.hpp"
-#include "gimm/metrics/matches.hpp"
+#include "gimm/match/matches.hpp"
 #include "gimm/metrics/truth.hpp"
 
 namespace gimm {

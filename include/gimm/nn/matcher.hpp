@@ -6,7 +6,7 @@
 ///   -> 5x5 fine windows -> fine transformer -> soft-argmax.
 /// Points are in network-input pixels, pixel centres at integers: coarse cell (r, c) is pixel
 /// (8c, 8r), one fine pixel is 2 image pixels. Epipolar gating is applied by the caller
-/// (pipeline/matching.hpp), as it is geometry, not network.
+/// (match/learned.hpp), as it is geometry, not network.
 #include <array>
 #include <cmath>
 #include <cstdint>

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "gimm/metrics/baselines.hpp"
+#include "gimm/match/baselines.hpp"
 #include "gimm/metrics/summary.hpp"
 
 namespace fs = std::filesystem;

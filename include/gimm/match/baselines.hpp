@@ -1,5 +1,5 @@
 #pragma once
-/// Reference matchers that need no training, to calibrate the evaluation (docs/evaluation.md).
+/// Training-free matchers that calibrate the evaluation (docs/evaluation.md).
 ///
 /// oracle:   every dense GT label a <-> b + n, n ~ N(0, sigma^2 I) in pixels (gimm::Rng), with a
 ///           uniform random confidence (so the top K is a random sample of the labels). With
@@ -20,8 +20,9 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/rng.hpp"
-#include "gimm/metrics/matches.hpp"
-#include "gimm/metrics/truth.hpp"
+#include "gimm/dataset/reader.hpp"
+#include "gimm/match/matcher.hpp"
+#include "gimm/match/matches.hpp"
 
 namespace gimm {
 
@@ -110,5 +111,47 @@ inline PairMatches epipolar_matches(const PairTruth& truth, const EpipolarBaseli
   }
   return m;
 }
+
+/// The per-pair random stream of a baseline: seeded by the run seed, the method and the pair,
+/// so that a pair's matches do not depend on which other pairs are matched.
+inline Rng baseline_stream(std::uint64_t seed, const std::string& method, const std::string& id) {
+  return Rng(seed).fork(fnv1a(method + ":" + id));
+}
+
+/// The oracle behind the matcher interface (dataset mode: it reads the pair's labels).
+class OracleMatcher : public PairMatcher {
+ public:
+  OracleMatcher(double sigma_px, std::uint64_t seed) : sigma_(sigma_px), seed_(seed) {}
+  std::string name() const override { return "oracle"; }
+  bool needs_images() const override { return false; }
+  PairMatches match(const PairInput& pair) const override {
+    GIMM_CHECK(pair.truth, "oracle: pair '" << pair.id << "' has no labels (dataset mode only)");
+    Rng rng = baseline_stream(seed_, name(), pair.id);
+    return oracle_matches(*pair.truth, sigma_, rng);
+  }
+
+ private:
+  double sigma_;
+  std::uint64_t seed_;
+};
+
+/// Epipolar-nearest behind the matcher interface: both vessel masks and the exact F of the pair.
+class EpipolarMatcher : public PairMatcher {
+ public:
+  EpipolarMatcher(EpipolarBaselineOptions options, std::uint64_t seed)
+      : options_(options), seed_(seed) {}
+  std::string name() const override { return "epipolar"; }
+  bool needs_images() const override { return false; }
+  PairMatches match(const PairInput& pair) const override {
+    GIMM_CHECK(pair.truth,
+               "epipolar: pair '" << pair.id << "' has no masks and F (dataset mode only)");
+    Rng rng = baseline_stream(seed_, name(), pair.id);
+    return epipolar_matches(*pair.truth, options_, rng);
+  }
+
+ private:
+  EpipolarBaselineOptions options_;
+  std::uint64_t seed_;
+};
 
 }  // namespace gimm

@@ -24,7 +24,8 @@
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/gating.hpp"
-#include "gimm/metrics/matches.hpp"
+#include "gimm/match/matcher.hpp"
+#include "gimm/match/matches.hpp"
 #include "gimm/nn/matcher.hpp"
 
 namespace gimm {
@@ -171,5 +172,26 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
   }
   return result;
 }
+
+/// The learned matcher behind the matcher interface.
+class LearnedMatcher : public PairMatcher {
+ public:
+  LearnedMatcher(nn::Matcher network, MatchOptions options)
+      : network_(std::move(network)), options_(options) {}
+  std::string name() const override { return "learned"; }
+  PairMatches match(const PairInput& pair) const override { return run(pair).matches; }
+  /// The matches with what the network and the gate did (counts, the F used).
+  PairMatchResult run(const PairInput& pair) const {
+    GIMM_CHECK(pair.image_a && pair.image_b, "learned: pair '" << pair.id << "' has no images");
+    PairMatchResult r = match_pair(network_, *pair.image_a, *pair.image_b, pair.class_a,
+                                   pair.class_b, pair.camera_a, pair.camera_b, options_);
+    r.matches.pair = pair.id;
+    return r;
+  }
+
+ private:
+  nn::Matcher network_;
+  MatchOptions options_;
+};
 
 }  // namespace gimm

@@ -1,0 +1,90 @@
+// The matcher interface: each adapter gives what its function gives, names itself, and refuses
+// a pair it cannot match with the pair named.
+#include <catch2/catch.hpp>
+#include <memory>
+
+#include "gimm/io/matcher_file.hpp"
+#include "gimm/match/baselines.hpp"
+#include "gimm/match/learned.hpp"
+
+namespace {
+gimm::PairTruth crossing_truth() {
+  gimm::PairTruth t;
+  t.id = "p/LCA_00-01";
+  t.view_a = "LCA_00";
+  t.view_b = "LCA_01";
+  gimm::Image<std::uint8_t> ma(32, 32), mb(32, 32);
+  for (int k = 2; k < 30; ++k) {
+    ma(k, 10) = 255;  // a vertical vessel in A
+    mb(12, k) = 255;  // a horizontal one in B
+    gimm::Correspondence c;
+    c.a = {10.0, double(k)};
+    c.b = {double(k), 12.0};
+    c.world = {double(k), 0, 0};
+    t.dense.push_back(c);
+  }
+  t.mask_a = std::make_shared<const gimm::Image<std::uint8_t>>(ma);
+  t.mask_b = std::make_shared<const gimm::Image<std::uint8_t>>(mb);
+  t.F << 0, 0, 0, 0, 0, -1, 0, 1, 0;  // v_b = v_a: the epipolar lines are rows
+  return t;
+}
+
+bool same(const gimm::PairMatches& x, const gimm::PairMatches& y) {
+  return x.pair == y.pair && x.points_a == y.points_a && x.points_b == y.points_b &&
+         x.confidence == y.confidence;
+}
+}  // namespace
+
+TEST_CASE("Matcher interface: the baselines' adapters equal their functions", "[match]") {
+  const gimm::PairTruth t = crossing_truth();
+  gimm::PairInput input;
+  input.id = t.id;
+  input.truth = &t;
+  const gimm::OracleMatcher oracle(1.5, 7);
+  gimm::Rng rng = gimm::baseline_stream(7, "oracle", t.id);
+  CHECK(oracle.name() == "oracle");
+  CHECK_FALSE(oracle.needs_images());
+  CHECK(same(oracle.match(input), gimm::oracle_matches(t, 1.5, rng)));
+  const gimm::EpipolarMatcher epipolar({}, 7);
+  rng = gimm::baseline_stream(7, "epipolar", t.id);
+  const gimm::PairMatches e = epipolar.match(input);
+  CHECK(same(e, gimm::epipolar_matches(t, {}, rng)));
+  CHECK(e.size() > 0);
+  gimm::PairInput none;
+  none.id = "p/x";
+  CHECK_THROWS_WITH(oracle.match(none), Catch::Contains("'p/x'"));
+  CHECK_THROWS_WITH(epipolar.match(none), Catch::Contains("'p/x'"));
+}
+
+TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]") {
+  const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
+  const auto expected =
+      gimm::io::SafetensorsFile::load(fixture + "parity_anchor_expected.safetensors");
+  const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
+  gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
+  for (std::int64_t n = 0; n < i0.numel(); ++n) {
+    a.data()[n] = i0[n];
+    b.data()[n] = i1[n];
+  }
+  gimm::MatchOptions options;
+  options.gate.mode = gimm::GateMode::none;
+  const gimm::LearnedMatcher learned(
+      gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors"), options);
+  gimm::PairInput input;
+  input.id = "p/LCA_00-01";
+  input.image_a = &a;
+  input.image_b = &b;
+  input.class_a = 3;
+  input.class_b = 7;
+  CHECK(learned.name() == "learned");
+  gimm::PairMatches direct =
+      gimm::match_pair(gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors"), a, b,
+                       3, 7, std::nullopt, std::nullopt, options)
+          .matches;
+  direct.pair = input.id;
+  const gimm::PairMatches via = learned.match(input);
+  CHECK(via.size() > 0);
+  CHECK(same(via, direct));
+  input.image_b = nullptr;
+  CHECK_THROWS_WITH(learned.match(input), Catch::Contains("'p/LCA_00-01' has no images"));
+}
