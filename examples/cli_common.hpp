@@ -1,7 +1,9 @@
 #pragma once
 // Shared CLI plumbing for the example programs: C-arm flags, error reporting, main wrapper.
 #include <CLI/CLI.hpp>
+#include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -10,6 +12,38 @@
 #include "gimm/geometry/carm.hpp"
 
 namespace gimm::cli {
+
+/// The shipped matcher weights' file name (weights/README.md is their model card).
+inline constexpr const char* kShippedWeights = "gimm-phantom-128.safetensors";
+
+/// Where the shipped weights are looked for, in order: $GIMM_WEIGHTS, the install tree
+/// (<prefix>/share/gimm/weights beside <prefix>/bin), the source tree this binary was built from.
+inline std::vector<std::filesystem::path> default_weights_candidates() {
+  std::vector<std::filesystem::path> out;
+  if (const char* env = std::getenv("GIMM_WEIGHTS")) out.emplace_back(env);
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+    out.push_back(exe.parent_path().parent_path() / "share" / "gimm" / "weights" / kShippedWeights);
+#ifdef GIMM_SOURCE_WEIGHTS_DIR
+  out.push_back(std::filesystem::path(GIMM_SOURCE_WEIGHTS_DIR) / kShippedWeights);
+#endif
+  return out;
+}
+
+inline std::string default_weights_hint() {
+  return std::string("$GIMM_WEIGHTS, else share/gimm/weights/") + kShippedWeights;
+}
+
+/// The first existing default_weights_candidates(); an error naming every place looked in.
+inline std::string default_weights() {
+  std::string tried;
+  for (const auto& p : default_weights_candidates()) {
+    if (std::filesystem::is_regular_file(p)) return p.string();
+    tried += " '" + p.string() + "'";
+  }
+  GIMM_FAIL("no --weights given and the shipped weights are not at" << tried);
+}
 
 /// The C-arm flags shared by gimm-carm and gimm-drr; fills `carm`.
 struct CArmFlags {

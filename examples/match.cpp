@@ -1,15 +1,16 @@
 // gimm-match: matches coronary points between two angiograms (the GIMM matcher, or the
 // training-free baselines in dataset mode).
-//   gimm-match --image-a A.png --image-b B.png --weights W.safetensors
+//   gimm-match --image-a A.png --image-b B.png [--weights W.safetensors]
 //              [--class-a ID --class-b ID] [--camera-a A.json --camera-b B.json]
 //              [--gate hard|soft|logit|none] [--tau PX] [--delta PX] [--input-size N]
 //              [--pair ID] [--out matches.json] [--picture pair.png]
-//   gimm-match --dataset DIR --weights W.safetensors --out PRED_DIR [--split all|train|val|test]
+//   gimm-match --dataset DIR [--weights W.safetensors] --out PRED_DIR [--split all|train|val|test]
 //              [--geometry cameras|matches] [--gate ...]
 //   gimm-match --dataset DIR --method epipolar|oracle --out PRED_DIR [--sigma PX] [--seed S]
 //              [--max-points N]
-// Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores. The
-// dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
+// Without --weights the shipped weights are used (weights/README.md), at the input size they
+// record. Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores.
+// The dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
 // from the views unless --geometry matches, which estimates F from the matches as the
 // reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line.
 // Images: 8- or 16-bit PNG, grey or colour (converted to grey), the same size; see
@@ -139,7 +140,9 @@ int main(int argc, char** argv) {
                  "match/matcher.hpp)")
       ->check(CLI::IsMember({"learned", "epipolar", "oracle"}))
       ->capture_default_str();
-  app.add_option("--weights", weights, "learned: matcher weights, safetensors")
+  app.add_option("--weights", weights,
+                 "learned: matcher weights, safetensors (default: the shipped weights, " +
+                     gimm::cli::default_weights_hint() + ")")
       ->check(CLI::ExistingFile);
   app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
       ->capture_default_str();
@@ -160,9 +163,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--delta", options.gate.delta_px, "hard gate threshold, px")
       ->capture_default_str();
-  app.add_option("--input-size", input_size,
-                 "resize the longer side to N before matching (0: as is)")
-      ->capture_default_str();
+  app.add_flag("--snap", options.snap_to_epipolar,
+               "move each B point onto its epipolar line after gating (needs a gate)");
+  auto* input_size_flag = app.add_option(
+      "--input-size", input_size,
+      "resize the longer side to N before matching (0: as is; default: the size the weights "
+      "were trained at, as they record it)");
   app.add_option("--pair", pair,
                  "pair id written into the matches file, e.g. phantom-0000/LCA_00-01");
   app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
@@ -171,7 +177,13 @@ int main(int argc, char** argv) {
   return gimm::cli::run(app, argc, argv, [&] {
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
-    options.input_size = input_size;
+    // The learned matcher's weights (given or shipped) and the input size they were trained at.
+    const auto load_network = [&] {
+      if (weights.empty()) weights = gimm::cli::default_weights();
+      gimm::nn::Matcher network = gimm::io::load_matcher(weights);
+      options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
+      return network;
+    };
     if (!dataset.empty()) {
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
                      picture.empty() && pair.empty() && class_a == 0 && class_b == 0,
@@ -180,8 +192,8 @@ int main(int argc, char** argv) {
       GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
       std::unique_ptr<gimm::PairMatcher> matcher;
       if (method == "learned") {
-        GIMM_CHECK(!weights.empty(), "--method learned needs --weights W.safetensors");
-        matcher = std::make_unique<gimm::LearnedMatcher>(gimm::io::load_matcher(weights), options);
+        gimm::nn::Matcher network = load_network();
+        matcher = std::make_unique<gimm::LearnedMatcher>(std::move(network), options);
       } else {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
         GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
@@ -195,10 +207,9 @@ int main(int argc, char** argv) {
     GIMM_CHECK(method == "learned", "--method " << method
                                                 << " matches a dataset's pairs (it needs their "
                                                    "masks or labels): give --dataset DIR");
-    GIMM_CHECK(!weights.empty(), "--method learned needs --weights W.safetensors");
     GIMM_CHECK(!image_a.empty() && !image_b.empty(),
                "give --image-a and --image-b (or --dataset DIR)");
-    const gimm::nn::Matcher matcher = gimm::io::load_matcher(weights);
+    const gimm::nn::Matcher matcher = load_network();
     const gimm::Image<float> a = gimm::read_png_unit(image_a);
     const gimm::Image<float> b = gimm::read_png_unit(image_b);
     const auto loaded = std::chrono::steady_clock::now();

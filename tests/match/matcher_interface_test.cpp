@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <memory>
 
+#include "gimm/geometry/carm.hpp"
 #include "gimm/io/matcher_file.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/learned.hpp"
@@ -87,4 +88,48 @@ TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]")
   CHECK(same(via, direct));
   input.image_b = nullptr;
   CHECK_THROWS_WITH(learned.match(input), Catch::Contains("'p/LCA_00-01' has no images"));
+}
+
+TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[match]") {
+  const Eigen::Vector3d l(3, 4, -10);  // 3u + 4v = 10
+  const Eigen::Vector2d foot = gimm::foot_on_line(l, {5, 5});
+  CHECK(3 * foot.x() + 4 * foot.y() == Approx(10));
+  CHECK((Eigen::Vector2d(5, 5) - foot).norm() == Approx(25.0 / 5.0));  // |3*5+4*5-10| / 5
+
+  const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
+  const auto expected =
+      gimm::io::SafetensorsFile::load(fixture + "parity_anchor_expected.safetensors");
+  const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
+  gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
+  for (std::int64_t n = 0; n < i0.numel(); ++n) {
+    a.data()[n] = i0[n];
+    b.data()[n] = i1[n];
+  }
+  gimm::CArm carm;
+  carm.rows = a.rows();
+  carm.cols = a.cols();
+  carm.primary_deg = 30;
+  const gimm::Camerad cam_a = carm.camera();
+  carm.primary_deg = -20;
+  carm.secondary_deg = 15;
+  const gimm::Camerad cam_b = carm.camera();
+  const Eigen::Matrix3d F = gimm::fundamental_from_cameras(cam_a, cam_b);
+  gimm::MatchOptions options;
+  options.gate.delta_px = 1e6;  // keep everything: the snap alone is tested
+  const gimm::nn::Matcher network =
+      gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors");
+  const auto plain = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;
+  options.snap_to_epipolar = true;
+  const auto snapped = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;
+  REQUIRE(plain.size() > 0);
+  REQUIRE(snapped.size() == plain.size());
+  for (std::size_t k = 0; k < plain.size(); ++k) {
+    const Eigen::Vector3d line = F * snapped.points_a[k].homogeneous();
+    CHECK(std::abs(line.dot(snapped.points_b[k].homogeneous())) / line.head<2>().norm() < 1e-6);
+    CHECK(snapped.points_a[k] == plain.points_a[k]);
+    CHECK(snapped.confidence[k] == plain.confidence[k]);
+  }
+  options.gate.mode = gimm::GateMode::none;
+  CHECK_THROWS_WITH(gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options),
+                    Catch::Contains("needs an F"));
 }

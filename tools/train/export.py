@@ -3,6 +3,7 @@
 
     /usr/bin/python3 tools/train/export.py --out W.safetensors [--seed S] [--from W.safetensors]
                                            [--onnx PREFIX --sizes 256 512] [--threshold T]
+                                           [--input-size N]
 
 Without --from, the weights are PyTorch's default initialisation from --seed, with FiLM's last
 layer scaled by 0.1 (untrained FiLM otherwise adds one large offset to every token). That is
@@ -52,6 +53,9 @@ def main():
     parser.add_argument("--from", dest="source", help="start from these weights")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threshold", type=float, help="override the coarse threshold")
+    parser.add_argument("--input-size", type=int,
+                        help="record the input size the weights were trained at (gimm-match's "
+                             "default --input-size)")
     parser.add_argument("--onnx", help="ONNX output prefix")
     parser.add_argument("--sizes", type=int, nargs="+", default=[256, 512])
     args = parser.parse_args()
@@ -65,6 +69,8 @@ def main():
             model.film.mlp[2].bias.mul_(0.1)
     if args.threshold is not None:
         model.cfg["threshold"] = args.threshold
+    if args.input_size is not None:
+        model.cfg["input_size"] = args.input_size
     if args.out:
         save_file(args.out, fold_free_state_dict(model), config_metadata(model.cfg))
         params = sum(p.numel() for p in model.parameters())

@@ -244,8 +244,10 @@ def val_key(v):
 
 # ---- main --------------------------------------------------------------------------------
 
-def save_weights(model, path, threshold):
-    cfg = dict(model.cfg, threshold=threshold)
+def save_weights(model, path, threshold, input_size):
+    """The weights gimm-match loads, with the coarse threshold and the input size they were
+    trained at (gimm-match resizes to it by default)."""
+    cfg = dict(model.cfg, threshold=threshold, input_size=input_size)
     tmp = path + ".tmp"
     save_file(tmp, fold_free_state_dict(model), config_metadata(cfg))
     os.replace(tmp, path)
@@ -327,7 +329,8 @@ def main(argv=None):
                 "epoch": epoch, "pos": pos, "best": best, "gen": gens, "args": vars(args),
                 "torch_rng": torch.get_rng_state(),
                 "cpu_seconds": cpu0 + (time.process_time() - cpu_start) * world})
-            save_weights(model, os.path.join(args.run, "last.safetensors"), args.val_threshold)
+            save_weights(model, os.path.join(args.run, "last.safetensors"), args.val_threshold,
+                         args.size)
 
     while True:
         out_of_time = time.time() - start > args.minutes * 60 or step >= args.steps
@@ -392,7 +395,8 @@ def run_validation(model, val, args, step, log, best):
     log.write(json.dumps({"val": v}) + "\n")
     log.flush()
     if improved:
-        save_weights(model, os.path.join(args.run, "best.safetensors"), args.val_threshold)
+        save_weights(model, os.path.join(args.run, "best.safetensors"), args.val_threshold,
+                     args.size)
         return v
     return best
 

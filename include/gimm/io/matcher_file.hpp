@@ -69,6 +69,7 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   c.border = config_value<int>(j, "border", where);
   c.window = config_value<int>(j, "window", where);
   if (j.contains("anchor")) c.anchor = config_value<bool>(j, "anchor", where);
+  if (j.contains("input_size")) c.input_size = config_value<int>(j, "input_size", where);
   try {
     c.validate();
   } catch (const Error& e) {

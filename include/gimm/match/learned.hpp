@@ -33,7 +33,17 @@ namespace gimm {
 struct MatchOptions {
   int input_size = 0;  ///< 0: the image's own size; N: longer side resized to N (then padded)
   GateOptions gate{};  ///< mode (hard by default), tau, delta, reference F settings
+  /// After gating, move each B point to the nearest point of its epipolar line F a: the match
+  /// keeps its position along the line and loses its error across it (needs an F).
+  bool snap_to_epipolar = false;
 };
+
+/// The point of the line l = (l1, l2, l3) (l1 u + l2 v + l3 = 0) nearest to p.
+inline Eigen::Vector2d foot_on_line(const Eigen::Vector3d& l, const Eigen::Vector2d& p) {
+  const double n2 = l.x() * l.x() + l.y() * l.y();
+  if (!(n2 > 0)) return p;
+  return p - (l.x() * p.x() + l.y() * p.y() + l.z()) / n2 * Eigen::Vector2d(l.x(), l.y());
+}
 
 /// One image as the network sees it.
 struct NetworkInput {
@@ -108,6 +118,8 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
                                   const std::optional<Camerad>& camera_b,
                                   const MatchOptions& options) {
   options.gate.validate();
+  GIMM_CHECK(!options.snap_to_epipolar || options.gate.mode != GateMode::none,
+             "snapping to the epipolar line needs an F: a gate other than none");
   GIMM_CHECK(image_a.rows() == image_b.rows() && image_a.cols() == image_b.cols(),
              "image B is " << image_b.cols() << "x" << image_b.rows() << " but image A is "
                            << image_a.cols() << "x" << image_a.rows()
@@ -168,7 +180,11 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
       ++result.dropped_by_gate;
       continue;
     }
-    result.matches.add(raw.points_a[k], raw.points_b[k], gated.confidence(Eigen::Index(k)));
+    const Eigen::Vector2d b =
+        options.snap_to_epipolar && result.F
+            ? foot_on_line(*result.F * raw.points_a[k].homogeneous(), raw.points_b[k])
+            : raw.points_b[k];
+    result.matches.add(raw.points_a[k], b, gated.confidence(Eigen::Index(k)));
   }
   return result;
 }

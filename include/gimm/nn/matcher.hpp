@@ -47,6 +47,9 @@ struct MatcherConfig {
   /// its score-weighted feature queries image 1's window) instead of the coarse cell centre.
   /// Absent in weights files written before it existed: false.
   bool anchor = false;
+  /// The longer image side (pixels) the weights were trained at; gimm-match resizes to it
+  /// unless told otherwise. 0: not recorded (run at the image's own size).
+  int input_size = 0;
 
   std::int64_t coarse_dim() const { return widths[2]; }
   std::int64_t fine_dim() const { return widths[0]; }
@@ -70,6 +73,9 @@ struct MatcherConfig {
     GIMM_CHECK(border >= 0, "matcher config: border must be >= 0, got " << border);
     GIMM_CHECK(window >= 1 && window % 2 == 1,
                "matcher config: window must be odd, got " << window);
+    GIMM_CHECK(
+        input_size >= 0 && input_size % 8 == 0 && input_size <= 8192,
+        "matcher config: input_size must be 0 or a multiple of 8 up to 8192, got " << input_size);
   }
 };
 
