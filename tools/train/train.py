@@ -40,6 +40,8 @@ def parse_args(argv=None):
     p.add_argument("--resume", action="store_true", help="continue RUN/checkpoint.pt")
     p.add_argument("--minutes", type=float, default=90.0, help="wall-clock budget of this call")
     p.add_argument("--steps", type=int, default=20000, help="schedule length (cosine to 0)")
+    p.add_argument("--stop-at", type=int, default=0,
+                   help="stop this call at this step (0: at --steps); the schedule is unchanged")
     p.add_argument("--warmup", type=int, default=300)
     p.add_argument("--lr", type=float, default=2e-3)
     p.add_argument("--weight-decay", type=float, default=0.05)
@@ -270,7 +272,7 @@ def main(argv=None):
         if not os.path.isfile(ckpt_path):
             raise SystemExit(f"train: --resume: {ckpt_path} does not exist")
         state = torch.load(ckpt_path)
-        keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads"}
+        keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads", "stop_at"}
         saved = state["args"]
         args = argparse.Namespace(**{**saved, **{k: getattr(args, k) for k in keep}})
     if rank == 0:
@@ -333,7 +335,8 @@ def main(argv=None):
                          args.size)
 
     while True:
-        out_of_time = time.time() - start > args.minutes * 60 or step >= args.steps
+        out_of_time = (time.time() - start > args.minutes * 60 or step >= args.steps
+                       or (args.stop_at and step >= args.stop_at))
         if all_stop(out_of_time, world):
             break
         if pos + per_step > len(order):
