@@ -42,7 +42,7 @@ TEST_CASE("Oracle on a phantom patient: exact at sigma 0, Rayleigh A->B", "[metr
   const double sigma = 1.5;
   for (const auto& id : ids) {
     const auto truth = reader.pair(id);
-    gimm::Rng rng = gimm::Rng(1).fork(gimm::fnv1a(id));
+    gimm::Rng rng = gimm::Rng(1).fork(gimm::stable_hash(id));
     exact.push_back(gimm::score_pair(truth, gimm::oracle_matches(truth, 0.0, rng)));
     const auto noisy = gimm::score_pair(truth, gimm::oracle_matches(truth, sigma, rng));
     for (const auto& r : noisy.ranked) {

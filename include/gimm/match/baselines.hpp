@@ -19,22 +19,13 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/hash.hpp"
 #include "gimm/core/rng.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
 
 namespace gimm {
-
-/// FNV-1a of a string: a platform-independent seed for per-pair random streams.
-inline std::uint64_t fnv1a(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 inline PairMatches oracle_matches(const PairTruth& truth, double sigma_px, Rng& rng) {
   GIMM_CHECK(std::isfinite(sigma_px) && sigma_px >= 0,
@@ -115,7 +106,7 @@ inline PairMatches epipolar_matches(const PairTruth& truth, const EpipolarBaseli
 /// The per-pair random stream of a baseline: seeded by the run seed, the method and the pair,
 /// so that a pair's matches do not depend on which other pairs are matched.
 inline Rng baseline_stream(std::uint64_t seed, const std::string& method, const std::string& id) {
-  return Rng(seed).fork(fnv1a(method + ":" + id));
+  return Rng(seed).fork(stable_hash(method + ":" + id));
 }
 
 /// The oracle behind the matcher interface (dataset mode: it reads the pair's labels).

@@ -25,6 +25,7 @@
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"
+#include "gimm/core/hash.hpp"
 #include "gimm/dataset/writer.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/io/camera_json.hpp"
@@ -184,14 +185,6 @@ inline std::vector<PatientSource> scan_imagecas_folder(const std::filesystem::pa
                                                "for "
                                             << imagecas_patterns());
   return out;
-}
-
-/// A stable 64-bit hash (FNV-1a) of a patient id: per-patient random streams do not depend on
-/// the order, the shard or the machine.
-inline std::uint64_t stable_hash(const std::string& s) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (const unsigned char c : s) h = (h ^ c) * 0x100000001b3ull;
-  return h;
 }
 
 /// Patient-level split with exact proportions: the patients are ordered by a seeded hash of
