@@ -16,7 +16,7 @@
 #include <string>
 
 #include "gimm/io/files.hpp"
-#include "gimm/io/matcher_file.hpp"
+#include "gimm/nn/matcher_file.hpp"
 
 namespace {
 

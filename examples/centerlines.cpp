@@ -6,9 +6,9 @@
 #include <cstdio>
 
 #include "cli_common.hpp"
+#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/skeleton.hpp"
-#include "gimm/io/centerlines_json.hpp"
 #include "gimm/io/volume_file.hpp"
 
 int main(int argc, char** argv) {

@@ -26,11 +26,11 @@
 #include "cli_common.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
-#include "gimm/io/matcher_file.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/nn/matcher_file.hpp"
 
 namespace {
 

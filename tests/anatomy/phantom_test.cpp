@@ -5,10 +5,10 @@
 #include <catch2/catch.hpp>
 
 #include "gimm/anatomy/attenuation.hpp"
+#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/geometry/carm.hpp"
-#include "gimm/io/centerlines_json.hpp"
 #include "gimm/render/drr.hpp"
 
 namespace {

@@ -4,9 +4,9 @@
 #include <memory>
 
 #include "gimm/geometry/carm.hpp"
-#include "gimm/io/matcher_file.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/learned.hpp"
+#include "gimm/nn/matcher_file.hpp"
 
 namespace {
 gimm::PairTruth crossing_truth() {

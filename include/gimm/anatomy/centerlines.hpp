@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/core/error.hpp"
-#include "gimm/labels/views.hpp"
 
 namespace gimm {
 

@@ -9,21 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/core/error.hpp"
 
 namespace gimm {
-
-enum class CoronarySystem { RCA, LCA };
-
-inline const char* to_string(CoronarySystem s) {
-  return s == CoronarySystem::RCA ? "RCA" : "LCA";
-}
-
-inline CoronarySystem parse_coronary_system(const std::string& name) {
-  if (name == "RCA") return CoronarySystem::RCA;
-  if (name == "LCA") return CoronarySystem::LCA;
-  GIMM_FAIL("coronary system must be RCA or LCA, got '" << name << "'");
-}
 
 struct AngleRange {
   double lo;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "gimm/anatomy/attenuation.hpp"
+#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
@@ -29,7 +30,6 @@
 #include "gimm/dataset/writer.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/io/camera_json.hpp"
-#include "gimm/io/centerlines_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/io/volume_file.hpp"

@@ -7,8 +7,8 @@
 #include <type_traits>
 
 #include "gimm/core/error.hpp"
-#include "gimm/io/safetensors.hpp"
 #include "gimm/nn/matcher.hpp"
+#include "gimm/nn/safetensors.hpp"
 
 namespace gimm::io {
 

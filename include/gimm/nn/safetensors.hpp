@@ -38,7 +38,7 @@ namespace detail {
 inline void require_little_endian() {
 #if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__)
   static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
-                "gimm/io/safetensors.hpp: safetensors data is little-endian; this host is not");
+                "gimm/nn/safetensors.hpp: safetensors data is little-endian; this host is not");
 #else
   const std::uint16_t one = 1;
   unsigned char low;

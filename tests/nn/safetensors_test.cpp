@@ -7,7 +7,7 @@
 #include <fstream>
 #include <limits>
 
-#include "gimm/io/safetensors.hpp"
+#include "gimm/nn/safetensors.hpp"
 
 namespace fs = std::filesystem;
 using gimm::io::SafetensorsFile;
