@@ -9,8 +9,8 @@
 #include <fstream>
 #include <string>
 
-#include "gimm/io/matcher_file.hpp"
-#include "gimm/io/safetensors.hpp"
+#include "gimm/nn/matcher_file.hpp"
+#include "gimm/nn/safetensors.hpp"
 
 namespace {
 
@@ -20,18 +20,11 @@ gimm::nn::Tensor as_image(const gimm::nn::Tensor& image) {
   return image.reshaped({1, 1, image.dim(0), image.dim(1)});
 }
 
-}  // namespace
-
-TEST_CASE("matcher: parity with PyTorch on the committed fixtures", "[nn][parity]") {
-  // parity_*: A points at the coarse cell centres, its config written before the anchor key
-  // existed (the loader's default); parity_anchor_*: A points refined inside their windows.
-  const std::string prefix = GENERATE(std::string("parity"), std::string("parity_anchor"));
-  INFO("fixture " << prefix);
-  const auto expected =
-      gimm::io::SafetensorsFile::load(kFixtureDir + prefix + "_expected.safetensors");
-  const gimm::nn::Matcher matcher =
-      gimm::io::load_matcher(kFixtureDir + prefix + "_weights.safetensors");
-  CHECK(matcher.config().anchor == (prefix == "parity_anchor"));
+/// The C++ engine against PyTorch's outputs for one weights file.
+void check_parity(const std::string& expected_file, const std::string& weights_file) {
+  INFO("fixture " << expected_file << " with " << weights_file);
+  const auto expected = gimm::io::SafetensorsFile::load(expected_file);
+  const gimm::nn::Matcher matcher = gimm::io::load_matcher(weights_file);
   const int class0 = std::stoi(expected.metadata().at("class0"));
   const int class1 = std::stoi(expected.metadata().at("class1"));
   REQUIRE(class0 != class1);  // FiLM must see two different classes
@@ -69,6 +62,28 @@ TEST_CASE("matcher: parity with PyTorch on the committed fixtures", "[nn][parity
   CHECK((refined > 0) == matcher.config().anchor);
   INFO("fine points max |diff| = " << max_fine << " px");
   CHECK(max_fine <= 1e-3);
+}
+
+}  // namespace
+
+TEST_CASE("matcher: parity with PyTorch on the committed fixtures", "[nn][parity]") {
+  // parity_*: A points at the coarse cell centres, its config written before the anchor key
+  // existed (the loader's default); parity_anchor_*: A points refined inside their windows.
+  const std::string prefix = GENERATE(std::string("parity"), std::string("parity_anchor"));
+  check_parity(kFixtureDir + prefix + "_expected.safetensors",
+               kFixtureDir + prefix + "_weights.safetensors");
+  CHECK(gimm::io::load_matcher(kFixtureDir + prefix + "_weights.safetensors").config().anchor ==
+        (prefix == "parity_anchor"));
+}
+
+TEST_CASE("matcher: parity with PyTorch for the shipped weights on a phantom pair",
+          "[nn][parity]") {
+  // tools/train/make_parity_fixture.py --shipped: the trained weights of weights/ on one view
+  // pair of a held-out phantom patient, at the weights' input size.
+  const std::string weights =
+      std::string(GIMM_SOURCE_DIR) + "/weights/gimm-phantom-128.safetensors";
+  check_parity(kFixtureDir + "shipped_expected.safetensors", weights);
+  CHECK(gimm::io::load_matcher(weights).config().input_size == 128);
 }
 
 TEST_CASE("matcher: the view class changes the coarse confidences (FiLM is live)", "[nn]") {

@@ -2,6 +2,8 @@
 """Regenerates the PyTorch <-> C++ parity fixture of the matcher (tests/data/nn/).
 
     /usr/bin/python3 tools/train/make_parity_fixture.py [--out tests/data/nn]
+    /usr/bin/python3 tools/train/make_parity_fixture.py --shipped weights/W.safetensors \
+        DATASET/patients/phantom-0000/pairs/LCA_00-03.json
 
 Writes parity_weights.safetensors (a small model with random weights, random batch-norm
 statistics and random layer norms, config in __metadata__) and parity_expected.safetensors
@@ -50,7 +52,12 @@ def smooth_image(gen, h, w):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "..", "..", "tests", "data", "nn"))
+    parser.add_argument("--shipped", nargs=2, metavar=("WEIGHTS", "PAIR_JSON"),
+                        help="write only shipped_expected: WEIGHTS run on a dataset pair file")
     args = parser.parse_args()
+    if args.shipped:
+        write_shipped_fixture(args.out, *args.shipped)
+        return
     write_fixture(args.out, "parity", anchor=False)
     write_fixture(args.out, "parity_anchor", anchor=True)
 
@@ -94,6 +101,30 @@ def write_fixture(folder, prefix, anchor):
                "matches": str(len(out["i_ids"])), "probe_matches": str(len(confs))})
     print(f"parity fixture: {len(out['i_ids'])} of {len(confs)} mutual matches kept "
           f"(threshold {model.cfg['threshold']:.6f}); {prefix}_* written to {os.path.normpath(folder)}")
+
+
+def write_shipped_fixture(folder, weights, pair_file):
+    """shipped_expected: what PyTorch computes with the shipped weights on one real view pair
+    (a phantom pair at the weights' input size), for the C++ engine to reproduce."""
+    from export import load_model
+    from gimm_data import PairSample
+    model = load_model(weights)
+    sample = PairSample(pair_file, model.cfg.get("input_size", 0), {})
+    image0 = sample.image_a.float()[None, None]
+    image1 = sample.image_b.float()[None, None]
+    with torch.no_grad():
+        out = model(image0, image1, sample.class_a, sample.class_b)
+    expected = {
+        "image0": image0[0, 0], "image1": image1[0, 0], "confidence": out["conf"],
+        "i_ids": out["i_ids"].float(), "j_ids": out["j_ids"].float(), "mconf": out["mconf"],
+        "points0": out["points0"], "points1": out["points1"],
+    }
+    save_file(os.path.join(folder, "shipped_expected.safetensors"),
+              {k: v.detach().float().contiguous().numpy() for k, v in expected.items()},
+              {"class0": str(sample.class_a), "class1": str(sample.class_b),
+               "matches": str(len(out["i_ids"])), "pair": os.path.basename(pair_file)})
+    print(f"parity fixture: shipped weights, {len(out['i_ids'])} matches on "
+          f"{os.path.basename(pair_file)}; shipped_expected written to {os.path.normpath(folder)}")
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ best.safetensors (the best validation Prec@3px with coverage >= 0.5, else the be
 last.safetensors, log.jsonl (one JSON object per logged step and per validation) and config.json.
 --resume continues a run exactly: same step, schedule, data order and random streams.
 
-Several processes (gloo on CPU, NCCL on GPU): set WORLD_SIZE, RANK, LOCAL_RANK, MASTER_ADDR
+Several CPU processes (gloo): set WORLD_SIZE, RANK, LOCAL_RANK, MASTER_ADDR
 and MASTER_PORT by hand for each process (torchrun from Debian's torch 1.13 fails on Python
 3.11); docs/training.md has the commands. Each rank takes every WORLD_SIZE-th pair of the epoch's
 order; gradients are averaged by one all-reduce per step; ranks decide to stop together.
@@ -82,8 +82,7 @@ def blas_in_use():
 def init_ranks():
     world = int(os.environ.get("WORLD_SIZE", "1"))
     if world > 1:
-        backend = "nccl" if torch.cuda.is_available() else "gloo"
-        dist.init_process_group(backend)
+        dist.init_process_group("gloo")  # the model runs on the CPU (no GPU path yet)
         return dist.get_rank(), world
     return 0, 1
 
