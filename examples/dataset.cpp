@@ -83,6 +83,13 @@ int main(int argc, char** argv) {
     GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");
     GIMM_CHECK(input.empty() != (phantom_count == 0),
                "gimm-dataset: give exactly one of --input and --phantom");
+    // The view protocol picks every view's angles and the centerlines its isocentre: these
+    // flags would change nothing but the manifest.
+    for (const char* unused : {"--primary", "--secondary", "--isocenter"})
+      GIMM_CHECK(app.count(unused) == 0,
+                 "gimm-dataset: " << unused
+                                  << " sets nothing here (the view protocol picks the angles, "
+                                     "the centerlines the isocentre); use gimm-drr for one view");
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
     options.recipe = gimm::parse_contrast_preset(recipe);

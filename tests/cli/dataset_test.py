@@ -243,6 +243,13 @@ proc = run(COMMON + ["--out", out, "--shard", "0/2", "--export", "reference"], o
 check(proc.returncode != 0 and "--export with --shard 0/2" in proc.stderr and
       not os.path.exists(os.path.join(out, "patients")), f"--export with --shard: {proc.stderr}")
 
+# Flags that would set nothing are refused, before any work.
+for flag in (["--primary", "30"], ["--secondary", "-10"], ["--isocenter", "0", "0", "0"]):
+    out = os.path.join(TMP, "noop_flag")
+    proc = run(COMMON + ["--out", out] + flag, ok=False)
+    check(proc.returncode != 0 and f"{flag[0]} sets nothing" in proc.stderr and
+          not os.path.exists(out), f"{flag[0]}: {proc.stderr}")
+
 # The progress line: patients done, rate and ETA; after a full resume the rate counts no one.
 LOUD = [a for a in COMMON if a != "--quiet"]
 proc = run(LOUD[:1] + ["1"] + LOUD[2:] + ["--out", os.path.join(TMP, "progress")])
