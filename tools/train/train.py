@@ -271,7 +271,10 @@ def main(argv=None):
         if not os.path.isfile(ckpt_path):
             raise SystemExit(f"train: --resume: {ckpt_path} does not exist")
         state = torch.load(ckpt_path)
-        keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads", "stop_at"}
+        # Where the data and run live may change (a regenerated, byte-identical dataset); what
+        # was trained on and how may not.
+        keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads", "stop_at",
+                "dataset", "run"}
         saved = state["args"]
         args = argparse.Namespace(**{**saved, **{k: getattr(args, k) for k in keep}})
     if rank == 0:
