@@ -2,6 +2,7 @@
 // a pair it cannot match with the pair named.
 #include <catch2/catch.hpp>
 #include <memory>
+#include <utility>
 
 #include "gimm/geometry/carm.hpp"
 #include "gimm/match/baselines.hpp"
@@ -34,6 +35,18 @@ bool same(const gimm::PairMatches& x, const gimm::PairMatches& y) {
   return x.pair == y.pair && x.points_a == y.points_a && x.points_b == y.points_b &&
          x.confidence == y.confidence;
 }
+
+/// The two images of a parity fixture as gimm images.
+std::pair<gimm::Image<float>, gimm::Image<float>> fixture_images(const std::string& file) {
+  const auto expected = gimm::io::SafetensorsFile::load(file);
+  const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
+  gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
+  for (std::int64_t n = 0; n < i0.numel(); ++n) {
+    a.data()[n] = i0[n];
+    b.data()[n] = i1[n];
+  }
+  return {a, b};
+}
 }  // namespace
 
 TEST_CASE("Matcher interface: the baselines' adapters equal their functions", "[match]") {
@@ -59,14 +72,7 @@ TEST_CASE("Matcher interface: the baselines' adapters equal their functions", "[
 
 TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]") {
   const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
-  const auto expected =
-      gimm::io::SafetensorsFile::load(fixture + "parity_anchor_expected.safetensors");
-  const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
-  gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
-  for (std::int64_t n = 0; n < i0.numel(); ++n) {
-    a.data()[n] = i0[n];
-    b.data()[n] = i1[n];
-  }
+  const auto [a, b] = fixture_images(fixture + "parity_anchor_expected.safetensors");
   gimm::MatchOptions options;
   options.gate.mode = gimm::GateMode::none;
   const gimm::LearnedMatcher learned(
@@ -97,14 +103,7 @@ TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[m
   CHECK((Eigen::Vector2d(5, 5) - foot).norm() == Approx(25.0 / 5.0));  // |3*5+4*5-10| / 5
 
   const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
-  const auto expected =
-      gimm::io::SafetensorsFile::load(fixture + "parity_anchor_expected.safetensors");
-  const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
-  gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
-  for (std::int64_t n = 0; n < i0.numel(); ++n) {
-    a.data()[n] = i0[n];
-    b.data()[n] = i1[n];
-  }
+  const auto [a, b] = fixture_images(fixture + "parity_anchor_expected.safetensors");
   gimm::CArm carm;
   carm.rows = a.rows();
   carm.cols = a.cols();
