@@ -22,8 +22,7 @@
 #include "gimm/io/png.hpp"
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/views.hpp"
-#include "gimm/render/drr.hpp"
-#include "gimm/render/padded_attenuation.hpp"
+#include "gimm/render/view_renderer.hpp"
 
 namespace {
 
@@ -89,9 +88,6 @@ int main(int argc, char** argv) {
                "gimm-drr: output directory '" << out_dir.string() << "' does not exist");
     gimm::ContrastRecipe recipe;
     recipe.preset = gimm::parse_contrast_preset(recipe_name);
-    gimm::DrrOptions options;
-    options.projector = gimm::parse_projector(projector_name);
-    options.step_mm = step_mm;
 
     gimm::Volume<float> ct = gimm::read_volume<float>(volume_path);
     std::optional<gimm::Volume<std::uint8_t>> injected;
@@ -114,19 +110,19 @@ int main(int argc, char** argv) {
       Eigen::Map<Eigen::Vector3d>(flags.isocenter.data()) = centre;
     }
     flags.finish(carm);
-    // --recipe none: the volume already is attenuation; move it rather than copy 4 bytes/voxel.
-    if (recipe.preset == gimm::ContrastPreset::none) gimm::check_attenuation(ct, volume_path);
-    const gimm::PaddedAttenuation padded =
+    gimm::RendererOptions render_options;
+    render_options.recipe = recipe;
+    render_options.pad_mm = pad_mm;
+    render_options.projector = gimm::parse_projector(projector_name);
+    render_options.step_mm = step_mm;
+    // --recipe none: the volume already is attenuation; moved in rather than copied.
+    const gimm::ViewRenderer renderer =
         recipe.preset == gimm::ContrastPreset::none
-            ? gimm::padded_attenuation(std::move(ct), pad_mm, options.projector)
-            : gimm::padded_attenuation(ct, injected ? &*injected : nullptr, recipe, pad_mm,
-                                       options.projector, volume_path);
-    const gimm::Volume<float>& mu = padded.mu;
-    const gimm::AxialPads<float>& pads = padded.pads;
+            ? gimm::ViewRenderer::from_attenuation(std::move(ct), render_options, volume_path)
+            : gimm::ViewRenderer(ct, injected ? &*injected : nullptr, render_options, volume_path);
     const auto t_loaded = std::chrono::steady_clock::now();
     const gimm::Camerad camera = carm.camera();
-    const gimm::Image<float> line_integrals =
-        gimm::render_line_integrals(mu, pads, camera, options);
+    const gimm::Image<float> line_integrals = renderer.render(camera).line_integrals;
     const auto t_rendered = std::chrono::steady_clock::now();
 
     nlohmann::json camera_json = gimm::to_json(carm);
@@ -136,7 +132,7 @@ int main(int argc, char** argv) {
                           {"recipe", recipe_name},
                           {"projector", projector_name},
                           {"pad_mm", pad_mm},
-                          {"step_mm", options.step_mm},
+                          {"step_mm", step_mm},
                           {"mu_water_per_mm", recipe.mu_water},
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},
                           {"npy", "float32 line integrals (rows, cols), unitless"}};

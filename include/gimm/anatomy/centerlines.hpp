@@ -5,6 +5,7 @@
 /// a mask. Every later stage (labels, metrics) works on this one representation.
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gimm/anatomy/coronary_system.hpp"
@@ -46,6 +47,16 @@ struct CenterlineTree {
         GIMM_CHECK(br.points[n].allFinite() && std::isfinite(br.radii[n]) && br.radii[n] > 0,
                    what << ": branch '" << br.name << "' point " << n << " is ("
                         << br.points[n].transpose() << ") with radius " << br.radii[n]);
+    }
+  }
+
+  /// Appends the branches of `other` (another system's tree), their parent indices shifted to
+  /// this tree's numbering.
+  void append(const CenterlineTree& other) {
+    const int shift = static_cast<int>(branches.size());
+    for (auto b : other.branches) {
+      if (b.parent >= 0) b.parent += shift;
+      branches.push_back(std::move(b));
     }
   }
 

@@ -220,40 +220,6 @@ Volume<std::uint8_t> thin(const Volume<T>& mask, const Volume<float>& distance) 
   return img;
 }
 
-/// The foreground's bounding box grown by `margin` voxels (clamped to the grid), as a 0/1
-/// volume placed at the same world position. An empty mask gives a 1x1x1 empty volume.
-template <class T>
-Volume<std::uint8_t> crop_to_foreground(const Volume<T>& mask, int margin) {
-  std::array<int, 3> lo{mask.nx(), mask.ny(), mask.nz()}, hi{-1, -1, -1};
-  for (int k = 0; k < mask.nz(); ++k)
-    for (int j = 0; j < mask.ny(); ++j)
-      for (int i = 0; i < mask.nx(); ++i)
-        if (mask(i, j, k) != T(0)) {
-          const int idx[3] = {i, j, k};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], idx[a]);
-            hi[a] = std::max(hi[a], idx[a]);
-          }
-        }
-  VolumeGeometry g = mask.geometry();
-  if (hi[0] < 0) {
-    g.dims = {1, 1, 1};
-    return Volume<std::uint8_t>(g, 0);
-  }
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(0, lo[a] - margin);
-    hi[a] = std::min(mask.dims()[a] - 1, hi[a] + margin);
-    g.dims[a] = hi[a] - lo[a] + 1;
-  }
-  g.origin = mask.index_to_world(Eigen::Vector3d(lo[0], lo[1], lo[2]));
-  Volume<std::uint8_t> out(g, 0);
-  for (int k = 0; k < g.dims[2]; ++k)
-    for (int j = 0; j < g.dims[1]; ++j)
-      for (int i = 0; i < g.dims[0]; ++i)
-        out(i, j, k) = mask(i + lo[0], j + lo[1], k + lo[2]) != T(0);
-  return out;
-}
-
 struct SkeletonOptions {
   double min_spur_mm = 3.0;         ///< spurs shorter than max(this, spur_radius_factor * r) go
   double spur_radius_factor = 2.5;  ///< r = radius at the junction the spur leaves from

@@ -35,27 +35,11 @@
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
-#include "gimm/render/drr.hpp"
-#include "gimm/render/padded_attenuation.hpp"
 #include "gimm/render/vessel_mesh_projector.hpp"
+#include "gimm/render/view_renderer.hpp"
 #include "gimm/version.hpp"
 
 namespace gimm {
-
-/// Where the injected vessels' image comes from. voxel: the label's voxels carry the lumen
-/// attenuation (as the reference does; staircase edges). mesh: the background is rendered
-/// without injection and the lumen is added as exact chord length through the smoothed vessel
-/// surface (Embree), anti-aliased; the 2D mask and the overlap count come from the same mesh.
-enum class VesselMode { voxel, mesh };
-
-inline VesselMode parse_vessel_mode(const std::string& s) {
-  if (s == "voxel") return VesselMode::voxel;
-  if (s == "mesh") return VesselMode::mesh;
-  GIMM_FAIL("vessel mode must be voxel|mesh, got '" << s << "'");
-}
-inline const char* to_string(VesselMode m) {
-  return m == VesselMode::mesh ? "mesh" : "voxel";
-}
 
 struct DatasetOptions {
   std::uint64_t seed = 0;
@@ -244,8 +228,8 @@ struct PatientTimings {
   double read = 0;         ///< CT and label files (or building the phantom), grid check
   double split = 0;        ///< connected components, LCA/RCA split
   double centerlines = 0;  ///< distance transform, thinning, pruning
-  double attenuation = 0;  ///< HU -> attenuation, vessel box, empty-space blocks
-  double mesh = 0;         ///< vessel surface and lumen gain (mesh mode)
+  double attenuation = 0;  ///< dense tissue; voxel mode: the renderer (attenuation, vessel box)
+  double mesh = 0;         ///< mesh mode: the renderer (attenuation, vessel surface, lumen gain)
   double views = 0;        ///< view loops: renders, masks, waiting for the view files
   double pairs = 0;        ///< pair labels
   double writes = 0;       ///< view files (helper thread, during views), pair files, centerlines
@@ -323,38 +307,161 @@ inline std::string dropped_voxels_warning(const nlohmann::json& record, const Da
   return buf;
 }
 
-/// Generates one patient into out/patients/<id>/ and returns its record (also written as
-/// done.json, last, with "run" added). The stage timings go to patients/<id>/timings.json and
-/// to `timings` when given. Throws on bad input; the caller records the error.
-inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
-                                       const std::filesystem::path& out,
-                                       PatientTimings* timings = nullptr) {
-  namespace fs = std::filesystem;
-  PatientTimings t;
-  detail::Stopwatch whole;
-  detail::Stopwatch stage;
+/// A patient's CT (HU) and coronary label, on one grid.
+struct PatientVolumes {
   Volume<float> hu;
   Volume<std::uint8_t> label;
+};
+
+/// Step 1: the phantom built from its seed, or the CT and label files read and their grids
+/// checked against each other.
+inline PatientVolumes read_patient(const PatientSource& src) {
   if (src.phantom_seed) {
     PhantomOptions po;
     po.seed = *src.phantom_seed;
     po.size = src.phantom_size;
     Phantom p = make_phantom(po);
-    hu = volume_cast<float>(p.hu);
-    label = std::move(p.label);
-  } else {
-    GIMM_CHECK_AS(IoError, fs::exists(src.label),
-                  "patient " << src.id << ": label '" << src.label.string() << "' is missing");
-    hu = read_volume<float>(src.image);
-    label = read_volume<std::uint8_t>(src.label);
-    const std::string difference = grid_difference(hu.geometry(), label.geometry());
-    GIMM_CHECK(difference.empty(),
-               "patient " << src.id << ": image and label grids disagree: " << difference);
+    return {volume_cast<float>(p.hu), std::move(p.label)};
   }
+  GIMM_CHECK_AS(IoError, std::filesystem::exists(src.label),
+                "patient " << src.id << ": label '" << src.label.string() << "' is missing");
+  PatientVolumes v{read_volume<float>(src.image), read_volume<std::uint8_t>(src.label)};
+  const std::string difference = grid_difference(v.hu.geometry(), v.label.geometry());
+  GIMM_CHECK(difference.empty(),
+             "patient " << src.id << ": image and label grids disagree: " << difference);
+  return v;
+}
+
+/// The renderer of one system's views: its injection (voxel mode) or its vessel surface (mesh
+/// mode) over the patient's attenuation, with the patient's dense-tissue classes.
+inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::uint8_t>& mask,
+                                    const DatasetOptions& o, const std::string& patient,
+                                    const DenseTissue* dense) {
+  RendererOptions ro;
+  ro.recipe.preset = o.recipe;
+  ro.pad_mm = o.pad_mm;
+  ro.projector = o.projector;
+  ro.vessels = o.vessel_mode;
+  return ViewRenderer(hu, &mask, ro, "patient " + patient, dense,
+                      o.vessel_mode == VesselMode::mesh ? vessel_surface_from_mask(mask) : nullptr);
+}
+
+/// The camera record of one view: the C-arm, its view class and the injected system.
+inline nlohmann::json view_camera_json(const CArm& carm, const SampledView& view,
+                                       CoronarySystem system) {
+  nlohmann::json j = to_json(carm);
+  j["view_class"] = view.view_class;
+  j["view_name"] = view_class(view.view_class).name;
+  j["system"] = to_string(system);
+  return j;
+}
+
+/// The rendered and labelled views of one system.
+struct SystemViews {
+  std::vector<Camerad> cameras;
+  std::vector<std::vector<ProjectedPoint>> projected;  ///< per view, one per label point
+  std::vector<std::string> names;
+};
+
+/// Step: renders, labels and writes every view of `plan`. A view's outputs (Beer-Lambert and
+/// 16-bit scaling, labels, PNGs, JSON: serial work) are written on a helper thread while the
+/// next view renders on every core; one view in flight at a time. The helper adds its time to
+/// t.writes (one task at a time, each started after the previous one returned).
+inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewPlan& plan,
+                                       const CArm& settings, const Eigen::Vector3d& isocenter,
+                                       const std::vector<LabelPoint>& points,
+                                       const DatasetWriter& writer, const std::string& patient,
+                                       PatientTimings& t) {
+  SystemViews out;
+  const bool mesh_mode = renderer.options().vessels == VesselMode::mesh;
+  // Declared after everything the task reads, so an exception here waits for it first.
+  std::future<std::vector<ProjectedPoint>> in_flight;
+  const auto collect = [&] {
+    if (in_flight.valid()) out.projected.push_back(in_flight.get());
+  };
+  for (std::size_t v = 0; v < plan.views.size(); ++v) {
+    CArm carm = settings;
+    carm.primary_deg = plan.views[v].primary_deg;
+    carm.secondary_deg = plan.views[v].secondary_deg;
+    carm.isocenter = isocenter;
+    const Camerad camera = carm.camera();
+    const std::string name = view_name(to_string(plan.system), v);
+    RenderedView view = renderer.render(camera);
+    nlohmann::json cj = view_camera_json(carm, plan.views[v], plan.system);
+    collect();
+    in_flight = std::async(std::launch::async, [&, view = std::move(view), cj = std::move(cj),
+                                                camera, name]() mutable {
+      detail::Stopwatch writing;
+      auto labels = label_view(points, camera, &view.vessel_mask,
+                               mesh_mode ? &view.overlap : nullptr);
+      if (mesh_mode)
+        mark_occlusion(labels, points,
+                       [&](const Eigen::Vector3d& X) { return renderer.unoccluded(camera, X); });
+      writer.write_view(patient, name,
+                        {to_uint16_min_max(view.intensity()), std::move(view.vessel_mask),
+                         mesh_mode ? &view.overlap : nullptr, std::move(cj),
+                         view_points_json(points, labels)});
+      t.writes += writing.lap();
+      return labels;
+    });
+    out.cameras.push_back(camera);
+    out.names.push_back(name);
+  }
+  collect();
+  return out;
+}
+
+/// Step: labels and writes every pair of `plan`; returns the number of dense labels.
+inline std::size_t label_system_pairs(const ViewPlan& plan, const SystemViews& views,
+                                      const std::vector<LabelPoint>& points,
+                                      const DatasetOptions& o, Rng& rng,
+                                      const DatasetWriter& writer, const std::string& patient,
+                                      PatientTimings& t) {
+  std::size_t dense_total = 0;
+  detail::Stopwatch stage;
+  for (const auto& pr : plan.pairs) {
+    const PairLabels labels =
+        label_pair(points, views.projected[pr.a], views.projected[pr.b], views.cameras[pr.a],
+                   views.cameras[pr.b], o.sparse_count, rng);
+    dense_total += labels.dense.size();
+    t.pairs += stage.lap();
+    writer.write_pair(patient, pair_name(to_string(plan.system), pr.a, pr.b),
+                      pair_json(labels, plan.views[pr.a], plan.views[pr.b], views.names[pr.a],
+                                views.names[pr.b]));
+    t.writes += stage.lap();
+  }
+  return dense_total;
+}
+
+/// The isocentre of a system's views: the mean of its centerline points (mm, LPS).
+inline Eigen::Vector3d centerline_centroid(const std::vector<LabelPoint>& points) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& p : points) sum += p.world;
+  return sum / static_cast<double>(std::max<std::size_t>(1, points.size()));
+}
+
+/// The record of a system the label does not have (allow_single_system).
+inline nlohmann::json absent_system_record() {
+  return {{"present", false}, {"voxels", 0},           {"views", 0},
+          {"pairs", 0},       {"centerline_mm", 0.0}, {"dense_labels", 0}};
+}
+
+/// Generates one patient into out/patients/<id>/ and returns its record (also written as
+/// done.json, last, with "run" added). The stage timings go to patients/<id>/timings.json and
+/// to `timings` when given. Throws on bad input; the caller records the error.
+/// The data flow of shared/docs/design.md, one named step per arrow.
+inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
+                                       const std::filesystem::path& out,
+                                       PatientTimings* timings = nullptr) {
+  PatientTimings t;
+  detail::Stopwatch whole;
+  detail::Stopwatch stage;
+  const PatientVolumes patient = read_patient(src);
   t.read = stage.lap();
   SplitOptions split_options;
   split_options.allow_single = o.allow_single_system;
-  const auto split = split_coronary_systems(label, split_options, "patient " + src.id + " label");
+  const auto split =
+      split_coronary_systems(patient.label, split_options, "patient " + src.id + " label");
   t.split = stage.lap();
   const DatasetWriter writer(out);
   writer.create_patient(src.id);
@@ -366,19 +473,19 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                            {"systems", nlohmann::json::object()}};
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
   // Bone or contrast (the angiography recipe's structure), found once for both systems.
-  ContrastRecipe recipe;
-  recipe.preset = o.recipe;
   std::optional<DenseTissue> dense;
-  if (recipe.preset == ContrastPreset::angiography) dense = classify_dense_tissue(hu, recipe);
+  if (o.recipe == ContrastPreset::angiography) {
+    ContrastRecipe recipe;
+    recipe.preset = o.recipe;
+    dense = classify_dense_tissue(patient.hu, recipe);
+  }
   t.attenuation += stage.lap();
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
     const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
     const std::int64_t voxels = system == CoronarySystem::LCA ? split.lca_voxels : split.rca_voxels;
     if (voxels == 0) {  // a single-tree label (allow_single_system): no views, no pairs
-      record["systems"][to_string(system)] = {{"present", false},     {"voxels", 0},
-                                              {"views", 0},           {"pairs", 0},
-                                              {"centerline_mm", 0.0}, {"dense_labels", 0}};
+      record["systems"][to_string(system)] = absent_system_record();
       continue;
     }
     stage.lap();
@@ -386,125 +493,21 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     so.system = system;
     so.min_spur_mm = o.min_spur_mm;
     const CenterlineTree tree = extract_centerlines(mask, so, "patient " + src.id);
-    const int shift = static_cast<int>(all.branches.size());
-    for (auto b : tree.branches) {
-      if (b.parent >= 0) b.parent += shift;
-      all.branches.push_back(std::move(b));
-    }
+    all.append(tree);
     // Branch indices in the labels refer to centerlines.json (both systems).
     const auto points = flatten_centerlines(all, system);
     t.centerlines += stage.lap();
-    const bool mesh_mode = o.vessel_mode == VesselMode::mesh;
-    const PaddedAttenuation padded =
-        padded_attenuation(hu, mesh_mode ? nullptr : &mask, recipe, o.pad_mm, o.projector,
-                           "patient " + src.id, dense ? &*dense : nullptr);
-    const Volume<float>& mu = padded.mu;
-    const AxialPads<float>& pads = padded.pads;
-    // The voxel mask projects through its bounding box only (a few % of the CT grid), as 0/1
-    // floats with its empty blocks found once for all views.
-    const Volume<float> vessel_box =
-        mesh_mode ? Volume<float>() : unit_mask(crop_to_foreground(mask, 1));
-    const EmptyBlocks vessel_blocks = mesh_mode ? EmptyBlocks() : EmptyBlocks(vessel_box);
-    const EmptyBlocks mu_blocks(mu);
-    t.attenuation += stage.lap();
-    std::optional<VesselMeshProjector> mesh_projector;
-    double lumen_gain = 0;  // mm^-1 the lumen adds over the (uninjected) background, mesh mode
-    if (mesh_mode) {
-      mesh_projector.emplace(mesh_from_mask(mask));
-      double injected = 0, plain = 0;
-      std::size_t count = 0;
-      // With the classes the attenuation used (a lumen voxel's "plain" value is blood, not bone).
-      for (std::size_t n = 0; n < mask.size(); ++n)
-        if (mask.data()[n]) {
-          const auto cls = dense ? static_cast<ContrastRecipe::Dense>(dense->classes.data()[n])
-                                 : ContrastRecipe::Dense::none;
-          injected += recipe.mu(hu.data()[n], true, cls);
-          plain += recipe.mu(hu.data()[n], false, cls);
-          ++count;
-        }
-      lumen_gain = count ? (injected - plain) / count : 0.0;
-    }
-    t.mesh += stage.lap();
+    const ViewRenderer renderer =
+        system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr);
+    (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
     const ViewPlan plan = plan_views(system, o.view_mode, rng);
-    const Eigen::Vector3d centre = [&] {
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (const auto& p : points) sum += p.world;
-      return Eigen::Vector3d(sum / std::max<std::size_t>(1, points.size()));
-    }();
-    std::vector<Camerad> cameras;
-    std::vector<std::vector<ProjectedPoint>> projected;
-    std::vector<std::string> names;
-    // A view's outputs (exp and 16-bit PNG, labels, mask PNG, JSON: serial work) are written on
-    // a helper thread while the next view renders on every core; one view in flight at a time.
-    // Declared after everything the task reads, so an exception here waits for it first. The
-    // task adds its time to t.writes: tasks run one after another, each started after get()
-    // returned the previous one, so they never touch it at once.
-    std::future<std::vector<ProjectedPoint>> in_flight;
-    const auto collect = [&] {
-      if (in_flight.valid()) projected.push_back(in_flight.get());
-    };
-    for (std::size_t v = 0; v < plan.views.size(); ++v) {
-      CArm carm = o.carm;
-      carm.primary_deg = plan.views[v].primary_deg;
-      carm.secondary_deg = plan.views[v].secondary_deg;
-      carm.isocenter = centre;
-      const Camerad camera = carm.camera();
-      const std::string name = view_name(to_string(system), v);
-      DrrOptions drr;
-      drr.projector = o.projector;
-      drr.empty_blocks = &mu_blocks;
-      Image<float> integrals = render_line_integrals(mu, pads, camera, drr);
-      Image<std::uint8_t> vessel, overlap;
-      if (mesh_mode) {
-        const VesselProjection vp = mesh_projector->project(camera);
-        vessel = Image<std::uint8_t>(camera.rows(), camera.cols(), 0);
-        for (std::size_t p = 0; p < integrals.size(); ++p) {
-          integrals.data()[p] += static_cast<float>(lumen_gain * vp.chord_mm.data()[p]);
-          vessel.data()[p] = vp.chord_mm.data()[p] > 0;
-        }
-        overlap = vp.passages;
-      } else {
-        vessel = project_unit_mask(vessel_box, camera, 1e-6, &vessel_blocks);
-      }
-      nlohmann::json cj = to_json(carm);
-      cj["view_class"] = plan.views[v].view_class;
-      cj["view_name"] = view_class(plan.views[v].view_class).name;
-      cj["system"] = to_string(system);
-      collect();
-      in_flight =
-          std::async(std::launch::async, [&, integrals = std::move(integrals),
-                                          vessel = std::move(vessel), overlap = std::move(overlap),
-                                          cj = std::move(cj), camera, name]() mutable {
-            detail::Stopwatch writing;
-            auto view = label_view(points, camera, &vessel, mesh_mode ? &overlap : nullptr);
-            if (mesh_mode)
-              mark_occlusion(view, points, [&](const Eigen::Vector3d& world) {
-                return mesh_projector->unoccluded(camera, world);
-              });
-            writer.write_view(
-                src.id, name,
-                {to_uint16_min_max(beer_lambert(integrals)), std::move(vessel),
-                 mesh_mode ? &overlap : nullptr, std::move(cj), view_points_json(points, view)});
-            t.writes += writing.lap();
-            return view;
-          });
-      cameras.push_back(camera);
-      names.push_back(name);
-    }
-    collect();
+    const SystemViews views = render_system_views(renderer, plan, o.carm, centerline_centroid(points),
+                                                  points, writer, src.id, t);
     t.views += stage.lap();
     t.view_count += plan.views.size();
-    std::size_t dense_total = 0;
-    for (const auto& pr : plan.pairs) {
-      const PairLabels labels = label_pair(points, projected[pr.a], projected[pr.b], cameras[pr.a],
-                                           cameras[pr.b], o.sparse_count, rng);
-      dense_total += labels.dense.size();
-      t.pairs += stage.lap();
-      writer.write_pair(
-          src.id, pair_name(to_string(system), pr.a, pr.b),
-          pair_json(labels, plan.views[pr.a], plan.views[pr.b], names[pr.a], names[pr.b]));
-      t.writes += stage.lap();
-    }
+    const std::size_t dense_total =
+        label_system_pairs(plan, views, points, o, rng, writer, src.id, t);
+    stage.lap();
     record["systems"][to_string(system)] = {{"present", true},
                                             {"voxels", voxels},
                                             {"views", plan.views.size()},

@@ -154,6 +154,37 @@ void siddon_integral_pair(const Volume<T>& volume, const IndexRay& ray0, const I
   out1 = b.sum;
 }
 
+/// What a ray meets in a mask (nonzero = inside): the distance to the first nonzero voxel and
+/// the number of separate nonzero runs (passages) along it.
+struct MaskRayHits {
+  double first_hit_mm = std::numeric_limits<double>::infinity();  ///< s where it enters; inf: none
+  int passages = 0;  ///< runs of nonzero voxels, each of positive length
+};
+
+/// The passages of `ray` (index space; s in world mm) through the nonzero voxels of `mask` over
+/// s_min <= s <= s_max, by the same traversal as siddon_integral. Zero-length segments (a ray
+/// through a voxel edge or corner) neither open nor split a passage.
+template <class T>
+MaskRayHits siddon_mask_hits(const Volume<T>& mask, const IndexRay& ray, double s_min = 0.0,
+                             double s_max = std::numeric_limits<double>::infinity()) {
+  MaskRayHits out;
+  detail::JacobsTraversal<T> t(mask, ray, s_min, s_max);
+  bool inside = false;
+  while (!t.done) {
+    const double s0 = t.s;
+    const bool on = t.data[t.lin] != T(0);
+    t.step();
+    const double s1 = t.done ? t.s_exit : t.s;
+    if (!(s1 > s0)) continue;
+    if (on && !inside) {
+      if (out.passages == 0) out.first_hit_mm = s0;
+      ++out.passages;
+    }
+    inside = on;
+  }
+  return out;
+}
+
 namespace detail {
 /// Siddon's parameters: the entry and exit of `ray` (index space, from s_min) and every voxel
 /// plane it crosses in between, sorted; empty when it misses.

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include "gimm/core/parallel.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/render/ray_volume.hpp"
+#include "gimm/render/vessel_surface.hpp"
 
 namespace gimm {
 
@@ -35,13 +37,7 @@ struct MeshRayResult {
   std::uint8_t passages = 0;                                    ///< separate inside intervals
 };
 
-struct VesselProjection {
-  Image<float> chord_mm;         ///< (rows, cols) chord length through the vessels, mm
-  Image<float> first_hit_mm;     ///< (rows, cols) distance from the source to the first hit, mm
-  Image<std::uint8_t> passages;  ///< (rows, cols) number of vessel passages (overlap count)
-};
-
-class VesselMeshProjector {
+class VesselMeshProjector final : public VesselSurface {
  public:
   explicit VesselMeshProjector(const TriangleMesh& mesh) {
     GIMM_CHECK(!mesh.triangles.empty(), "VesselMeshProjector: the vessel mesh is empty");
@@ -135,7 +131,7 @@ class VesselMeshProjector {
 
   /// Whether world point X (inside or near a vessel) is seen by `camera` without another
   /// vessel passage in front of it: at most one passage (its own) between the source and X.
-  bool unoccluded(const Camerad& camera, const Eigen::Vector3d& X) const {
+  bool unoccluded(const Camerad& camera, const Eigen::Vector3d& X) const override {
     const Eigen::Vector2d uv = camera.project(X).uv;
     const Ray<double> ray = camera.ray(uv.x(), uv.y());
     const double distance = (X - ray.origin).dot(ray.direction);
@@ -143,7 +139,7 @@ class VesselMeshProjector {
   }
 
   /// All detector pixels of `camera`, multithreaded over rows, deterministic.
-  VesselProjection project(const Camerad& camera) const {
+  VesselProjection project(const Camerad& camera) const override {
     VesselProjection out{
         Image<float>(camera.rows(), camera.cols(), 0.0f),
         Image<float>(camera.rows(), camera.cols(), std::numeric_limits<float>::infinity()),
@@ -164,6 +160,13 @@ class VesselMeshProjector {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
 };
+
+/// The Embree surface of a binary vessel mask (mesh_from_mask with its defaults), for
+/// ViewRenderer's mesh mode.
+template <class T>
+std::shared_ptr<const VesselSurface> vessel_surface_from_mask(const Volume<T>& mask) {
+  return std::make_shared<const VesselMeshProjector>(mesh_from_mask(mask));
+}
 
 /// Slow reference for tests: the same signed-crossing chord by brute force over every triangle
 /// (Moller-Trumbore in double precision).
