@@ -58,7 +58,7 @@ struct Scene {
 
 inline double separation_deg(const gimm::CArm& a, const gimm::CArm& b) {
   const double c = a.source_direction().dot(b.source_direction());
-  return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / gimm::kPi;
+  return gimm::rad_to_deg(std::acos(std::clamp(c, -1.0, 1.0)));
 }
 
 /// Random 3D point: in the cube, or in the slab spanned by (u, v) with normal w.
@@ -88,7 +88,7 @@ inline Scene make_scene(const SceneOptions& o) {
     const double cb2 = std::cos(b) * std::cos(b);
     const double cos_d =
         (std::cos(gimm::deg_to_rad(o.separation_deg)) - (1 - cb2)) / std::max(cb2, 1e-12);
-    const double d = std::acos(std::clamp(cos_d, -1.0, 1.0)) * 180.0 / gimm::kPi;
+    const double d = gimm::rad_to_deg(std::acos(std::clamp(cos_d, -1.0, 1.0)));
     s.arm_b.secondary_deg = s.arm_a.secondary_deg;
     s.arm_b.primary_deg = s.arm_a.primary_deg + (s.arm_a.primary_deg > 0 ? -d : d);
   }

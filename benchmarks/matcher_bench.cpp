@@ -27,7 +27,7 @@ std::string env(const char* name) {
 
 gimm::nn::Matcher make_matcher() {
   const std::string path = env("GIMM_MATCHER_WEIGHTS");
-  if (!path.empty()) return gimm::io::load_matcher(path);
+  if (!path.empty()) return gimm::nn::load_matcher(path);
   std::mt19937 rng(0);
   gimm::nn::MatcherConfig config;
   config.threshold = 0.0f;

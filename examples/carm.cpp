@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       const auto a = gimm::camera_from_json(gimm::read_json_file(pair[0]), pair[0]);
       const auto b = gimm::camera_from_json(gimm::read_json_file(pair[1]), pair[1]);
       nlohmann::json out;
-      out["F"] = gimm::detail::matrix_to_json(gimm::fundamental_from_cameras(a, b));
+      out["F"] = gimm::matrix_to_json(gimm::fundamental_from_cameras(a, b));
       out["convention"] = "x_b^T F x_a = 0, pixels, A = " + pair[0] + ", B = " + pair[1];
       std::cout << out.dump(2) << "\n";
       return 0;

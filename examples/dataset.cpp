@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"voxel", "mesh"}))
       ->capture_default_str();
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
+  app.add_flag("--line-integrals", options.write_line_integrals,
+               "also write each view's float32 line integrals (<view>.npy, (rows, cols))");
   app.add_flag("--allow-single-system", options.allow_single_system,
                "a label of one tree: make that system only (assigned by the volume centre), "
                "record the other as absent");
@@ -92,7 +94,7 @@ int main(int argc, char** argv) {
                                      "the centerlines the isocentre); use gimm-drr for one view");
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
-    options.recipe = gimm::parse_contrast_preset(recipe);
+    options.preset = gimm::parse_contrast_preset(recipe);
     options.projector = gimm::parse_projector(projector);
     options.vessel_mode = gimm::parse_vessel_mode(vessel_mode);
     gimm::DatasetRunOptions run;

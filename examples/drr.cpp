@@ -5,8 +5,8 @@
 // Writes PREFIX.png (16-bit Beer-Lambert intensity, min-max normalised per image),
 // PREFIX.npy (float32 line integrals, (rows, cols)) and PREFIX.camera.json.
 // --recipe none reads the volume as attenuation (mm^-1) instead of HU.
-// Default isocentre: the centroid of the injected system's mask when --label is given, else
-// the centre of the volume (the world origin of an ImageCAS file is nowhere near the heart).
+// Default isocentre (anatomy/isocenter.hpp, as the dataset's views): the centroid of the injected
+// system's lumen voxels when --label is given, else the centre of the volume's grid.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +16,7 @@
 #include "cli_common.hpp"
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/anatomy/components.hpp"
+#include "gimm/anatomy/isocenter.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/npy.hpp"
@@ -23,23 +24,6 @@
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/views.hpp"
 #include "gimm/render/view_renderer.hpp"
-
-namespace {
-
-Eigen::Vector3d mask_centroid(const gimm::Volume<std::uint8_t>& mask) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  double count = 0;
-  for (int k = 0; k < mask.nz(); ++k)
-    for (int j = 0; j < mask.ny(); ++j)
-      for (int i = 0; i < mask.nx(); ++i)
-        if (mask(i, j, k)) {
-          sum += Eigen::Vector3d(i, j, k);
-          count += 1;
-        }
-  return mask.index_to_world(sum / count);
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-drr: a simulated angiogram of a CT volume under one C-arm view"};
@@ -105,8 +89,7 @@ int main(int argc, char** argv) {
     if (flags.isocenter.empty()) {
       flags.isocenter.resize(3);
       const Eigen::Vector3d centre =
-          injected ? mask_centroid(*injected)
-                   : ct.index_to_world(Eigen::Vector3d(ct.nx() - 1, ct.ny() - 1, ct.nz() - 1) / 2);
+          injected ? gimm::vessel_isocenter(*injected, label_path) : gimm::grid_center(ct);
       Eigen::Map<Eigen::Vector3d>(flags.isocenter.data()) = centre;
     }
     flags.finish(carm);

@@ -180,7 +180,7 @@ int main(int argc, char** argv) {
     // The learned matcher's weights (given or shipped) and the input size they were trained at.
     const auto load_network = [&] {
       if (weights.empty()) weights = gimm::cli::default_weights();
-      gimm::nn::Matcher network = gimm::io::load_matcher(weights);
+      gimm::nn::Matcher network = gimm::nn::load_matcher(weights);
       options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
       return network;
     };

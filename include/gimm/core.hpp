@@ -1,6 +1,9 @@
 #pragma once
-/// The core room: errors and checks, Image, Volume, deterministic RNG, parallel-for.
+/// The core room: errors and checks, constants, Image, Volume, deterministic RNG, stable hash,
+/// parallel-for.
+#include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
+#include "gimm/core/hash.hpp"
 #include "gimm/core/image.hpp"
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/rng.hpp"

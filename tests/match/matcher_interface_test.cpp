@@ -38,7 +38,7 @@ bool same(const gimm::PairMatches& x, const gimm::PairMatches& y) {
 
 /// The two images of a parity fixture as gimm images.
 std::pair<gimm::Image<float>, gimm::Image<float>> fixture_images(const std::string& file) {
-  const auto expected = gimm::io::SafetensorsFile::load(file);
+  const auto expected = gimm::nn::SafetensorsFile::load(file);
   const gimm::nn::Tensor i0 = expected.tensor("image0"), i1 = expected.tensor("image1");
   gimm::Image<float> a(int(i0.dim(0)), int(i0.dim(1))), b(a.rows(), a.cols());
   for (std::int64_t n = 0; n < i0.numel(); ++n) {
@@ -76,7 +76,7 @@ TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]")
   gimm::MatchOptions options;
   options.gate.mode = gimm::GateMode::none;
   const gimm::LearnedMatcher learned(
-      gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors"), options);
+      gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors"), options);
   gimm::PairInput input;
   input.id = "p/LCA_00-01";
   input.image_a = &a;
@@ -85,7 +85,7 @@ TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]")
   input.class_b = 7;
   CHECK(learned.name() == "learned");
   gimm::PairMatches direct =
-      gimm::match_pair(gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors"), a, b,
+      gimm::match_pair(gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors"), a, b,
                        3, 7, std::nullopt, std::nullopt, options)
           .matches;
   direct.pair = input.id;
@@ -116,7 +116,7 @@ TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[m
   gimm::MatchOptions options;
   options.gate.delta_px = 1e6;  // keep everything: the snap alone is tested
   const gimm::nn::Matcher network =
-      gimm::io::load_matcher(fixture + "parity_anchor_weights.safetensors");
+      gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors");
   const auto plain = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;
   options.snap_to_epipolar = true;
   const auto snapped = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;

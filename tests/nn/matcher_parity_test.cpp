@@ -23,8 +23,8 @@ gimm::nn::Tensor as_image(const gimm::nn::Tensor& image) {
 /// The C++ engine against PyTorch's outputs for one weights file.
 void check_parity(const std::string& expected_file, const std::string& weights_file) {
   INFO("fixture " << expected_file << " with " << weights_file);
-  const auto expected = gimm::io::SafetensorsFile::load(expected_file);
-  const gimm::nn::Matcher matcher = gimm::io::load_matcher(weights_file);
+  const auto expected = gimm::nn::SafetensorsFile::load(expected_file);
+  const gimm::nn::Matcher matcher = gimm::nn::load_matcher(weights_file);
   const int class0 = std::stoi(expected.metadata().at("class0"));
   const int class1 = std::stoi(expected.metadata().at("class1"));
   REQUIRE(class0 != class1);  // FiLM must see two different classes
@@ -72,7 +72,7 @@ TEST_CASE("matcher: parity with PyTorch on the committed fixtures", "[nn][parity
   const std::string prefix = GENERATE(std::string("parity"), std::string("parity_anchor"));
   check_parity(kFixtureDir + prefix + "_expected.safetensors",
                kFixtureDir + prefix + "_weights.safetensors");
-  CHECK(gimm::io::load_matcher(kFixtureDir + prefix + "_weights.safetensors").config().anchor ==
+  CHECK(gimm::nn::load_matcher(kFixtureDir + prefix + "_weights.safetensors").config().anchor ==
         (prefix == "parity_anchor"));
 }
 
@@ -83,14 +83,14 @@ TEST_CASE("matcher: parity with PyTorch for the shipped weights on a phantom pai
   const std::string weights =
       std::string(GIMM_SOURCE_DIR) + "/weights/gimm-phantom-128.safetensors";
   check_parity(kFixtureDir + "shipped_expected.safetensors", weights);
-  CHECK(gimm::io::load_matcher(weights).config().input_size == 128);
+  CHECK(gimm::nn::load_matcher(weights).config().input_size == 128);
 }
 
 TEST_CASE("matcher: the view class changes the coarse confidences (FiLM is live)", "[nn]") {
   const auto expected =
-      gimm::io::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
+      gimm::nn::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
   const gimm::nn::Matcher matcher =
-      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+      gimm::nn::load_matcher(kFixtureDir + "parity_weights.safetensors");
   const auto a = as_image(expected.tensor("image0")), b = as_image(expected.tensor("image1"));
   const auto first = matcher.match(a, b, 3, 7, true);
   const auto swapped = matcher.match(a, b, 7, 3, true);
@@ -104,7 +104,7 @@ TEST_CASE("matcher: the view class changes the coarse confidences (FiLM is live)
 
 TEST_CASE("matcher: bad inputs are refused with the bad value named", "[nn]") {
   const gimm::nn::Matcher matcher =
-      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+      gimm::nn::load_matcher(kFixtureDir + "parity_weights.safetensors");
   const gimm::nn::Tensor good({1, 1, 64, 96});
   CHECK_THROWS_WITH(matcher.match(good, gimm::nn::Tensor({1, 1, 64, 88})),
                     Catch::Contains("image 1"));
@@ -117,7 +117,7 @@ TEST_CASE("matcher: bad inputs are refused with the bad value named", "[nn]") {
 }
 
 TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[nn][io]") {
-  const auto weights = gimm::io::SafetensorsFile::load(kFixtureDir + "parity_weights.safetensors");
+  const auto weights = gimm::nn::SafetensorsFile::load(kFixtureDir + "parity_weights.safetensors");
   std::vector<gimm::nn::Tensor> tensors;
   std::vector<std::string> names = weights.names();
   for (const auto& n : names) tensors.push_back(weights.tensor(n));
@@ -139,17 +139,17 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
       }
     }
     if (!extra.empty()) list.emplace_back(extra, &tensors[0]);
-    gimm::io::write_safetensors(dir + "/" + file, list, weights.metadata());
+    gimm::nn::write_safetensors(dir + "/" + file, list, weights.metadata());
     return dir + "/" + file;
   };
-  CHECK_THROWS_WITH(gimm::io::load_matcher(
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(
                         write_variant("missing.safetensors", "coarse.layers.1.k.weight", "", "")),
                     Catch::Contains("coarse.layers.1.k.weight"));
   CHECK_THROWS_WITH(
-      gimm::io::load_matcher(write_variant("extra.safetensors", "", "backbone.unused.weight", "")),
+      gimm::nn::load_matcher(write_variant("extra.safetensors", "", "backbone.unused.weight", "")),
       Catch::Contains("backbone.unused.weight"));
   CHECK_THROWS_WITH(
-      gimm::io::load_matcher(write_variant("shape.safetensors", "", "", "down_proj.weight")),
+      gimm::nn::load_matcher(write_variant("shape.safetensors", "", "", "down_proj.weight")),
       Catch::Contains("down_proj.weight"));
 
   // A config that disagrees with the tensors (wider coarse stage) fails on the first tensor.
@@ -160,33 +160,33 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
                                                     "\"widths\": [8, 16, 64]");
   std::vector<std::pair<std::string, const gimm::nn::Tensor*>> all;
   for (std::size_t i = 0; i < names.size(); ++i) all.emplace_back(names[i], &tensors[i]);
-  gimm::io::write_safetensors(dir + "/config.safetensors", all, meta);
-  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/config.safetensors"),
+  gimm::nn::write_safetensors(dir + "/config.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/config.safetensors"),
                     Catch::Contains("backbone.layer3.0.conv1.0.weight"));
 
   meta["gimm_config"] = std::string(config).replace(config.find("\"coarse_heads\": 4"),
                                                     std::string("\"coarse_heads\": 4").size(),
                                                     "\"coarse_heads\": 4.9");
-  gimm::io::write_safetensors(dir + "/heads.safetensors", all, meta);
-  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/heads.safetensors"),
+  gimm::nn::write_safetensors(dir + "/heads.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/heads.safetensors"),
                     Catch::Contains("'coarse_heads' must be an integer, got 4.9"));
 
   meta["gimm_config"] = "{not json";
-  gimm::io::write_safetensors(dir + "/badjson.safetensors", all, meta);
-  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/badjson.safetensors"),
+  gimm::nn::write_safetensors(dir + "/badjson.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/badjson.safetensors"),
                     Catch::Contains("gimm_config"));
 
   meta.erase("gimm_config");
-  gimm::io::write_safetensors(dir + "/noconfig.safetensors", all, meta);
-  CHECK_THROWS_WITH(gimm::io::load_matcher(dir + "/noconfig.safetensors"),
+  gimm::nn::write_safetensors(dir + "/noconfig.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/noconfig.safetensors"),
                     Catch::Contains("gimm_config"));
 }
 
 TEST_CASE("matcher: the result does not depend on the thread count", "[nn]") {
   const auto expected =
-      gimm::io::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
+      gimm::nn::SafetensorsFile::load(kFixtureDir + "parity_expected.safetensors");
   const gimm::nn::Matcher matcher =
-      gimm::io::load_matcher(kFixtureDir + "parity_weights.safetensors");
+      gimm::nn::load_matcher(kFixtureDir + "parity_weights.safetensors");
   // 256 x 256 as well, so that the large products (the 1024 x 1024 similarity) are split
   // across threads by Eigen.
   gimm::nn::Tensor big_a({1, 1, 256, 256}), big_b({1, 1, 256, 256});

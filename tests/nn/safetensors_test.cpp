@@ -10,7 +10,7 @@
 #include "gimm/nn/safetensors.hpp"
 
 namespace fs = std::filesystem;
-using gimm::io::SafetensorsFile;
+using gimm::nn::SafetensorsFile;
 using Bytes = std::vector<std::uint8_t>;
 
 namespace {
@@ -87,7 +87,7 @@ TEST_CASE("safetensors round trip keeps values, shapes, metadata and order", "[i
              empty = ramp({0, 3}, 1.0f);
   const std::map<std::string, std::string> metadata = {{"format", "pt"}, {"epoch", "12"}};
   const auto p = tmp_path("round.safetensors");
-  gimm::io::write_safetensors(
+  gimm::nn::write_safetensors(
       p.string(), {{"z.conv", &conv}, {"a.bias", &bias}, {"m.scalar", &scalar}, {"e", &empty}},
       metadata);
 
@@ -126,21 +126,21 @@ TEST_CASE("safetensors round trip keeps values, shapes, metadata and order", "[i
   CHECK_THROWS_WITH(file.tensor("nope"), Catch::Contains("'nope'") && Catch::Contains(p.string()));
 
   // No metadata: no __metadata__ key, an empty map back.
-  gimm::io::write_safetensors(p.string(), {{"b", &bias}}, {});
+  gimm::nn::write_safetensors(p.string(), {{"b", &bias}}, {});
   CHECK(SafetensorsFile::load(p.string()).metadata().empty());
 }
 
 TEST_CASE("safetensors writer rejects bad names", "[io][safetensors]") {
   const auto t = ramp({2}, 1.0f);
   const auto p = tmp_path("bad_names.safetensors").string();
-  CHECK_THROWS_WITH(gimm::io::write_safetensors(p, {{"a", &t}, {"a", &t}}, {}),
+  CHECK_THROWS_WITH(gimm::nn::write_safetensors(p, {{"a", &t}, {"a", &t}}, {}),
                     Catch::Contains("duplicate") && Catch::Contains("'a'"));
-  CHECK_THROWS_WITH(gimm::io::write_safetensors(p, {{"", &t}}, {}), Catch::Contains("empty"));
-  CHECK_THROWS_WITH(gimm::io::write_safetensors(p, {{"__metadata__", &t}}, {}),
+  CHECK_THROWS_WITH(gimm::nn::write_safetensors(p, {{"", &t}}, {}), Catch::Contains("empty"));
+  CHECK_THROWS_WITH(gimm::nn::write_safetensors(p, {{"__metadata__", &t}}, {}),
                     Catch::Contains("reserved"));
-  CHECK_THROWS_WITH(gimm::io::write_safetensors(p, {{"n", nullptr}}, {}), Catch::Contains("'n'"));
+  CHECK_THROWS_WITH(gimm::nn::write_safetensors(p, {{"n", nullptr}}, {}), Catch::Contains("'n'"));
   const gimm::nn::Tensor none;  // shape [] but no data
-  CHECK_THROWS_WITH(gimm::io::write_safetensors(p, {{"none", &none}}, {}),
+  CHECK_THROWS_WITH(gimm::nn::write_safetensors(p, {{"none", &none}}, {}),
                     Catch::Contains("'none'"));
   CHECK_FALSE(fs::exists(p));
 }
@@ -220,7 +220,7 @@ TEST_CASE("safetensors file written by tools/train/safetensors_io.py", "[io][saf
   // Same tensors in sorted order: gimm writes the very same bytes.
   const auto a = file.tensor("a"), b = file.tensor("b");
   const auto p = tmp_path("python_same.safetensors");
-  gimm::io::write_safetensors(p.string(), {{"a", &a}, {"b", &b}}, {{"format", "pt"}});
+  gimm::nn::write_safetensors(p.string(), {{"a", &a}, {"b", &b}}, {{"format", "pt"}});
   CHECK(gimm::read_file_bytes(p) == python);
 }
 
@@ -314,7 +314,7 @@ TEST_CASE("safetensors tensors must tile the data section exactly", "[io][safete
 TEST_CASE("safetensors truncated or corrupted files throw, never crash", "[io][safetensors]") {
   const auto w = ramp({3, 5}, 0.5f), b = ramp({5}, 1.0f);
   const auto p = tmp_path("cut.safetensors");
-  gimm::io::write_safetensors(p.string(), {{"w", &w}, {"b", &b}}, {{"note", "x"}});
+  gimm::nn::write_safetensors(p.string(), {{"w", &w}, {"b", &b}}, {{"note", "x"}});
   const auto bytes = gimm::read_file_bytes(p);
   for (std::size_t cut = 0; cut < bytes.size(); ++cut) {
     INFO("cut at " << cut << " of " << bytes.size());

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "gimm/anatomy/centerlines.hpp"
+#include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/rng.hpp"
@@ -206,7 +207,7 @@ class HeartFrame {
   PhantomAnatomy a_;
 };
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDeg = kPi / 180.0;  // degrees to radians
 
 /// Control points of a branch on the epicardium: (h in mm, phi in degrees).
 struct SurfacePath {

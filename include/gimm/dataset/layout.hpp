@@ -7,7 +7,8 @@
 ///   patients/<id>/views/<view>.png                   16-bit angiogram (Beer-Lambert, min-max)
 ///   patients/<id>/views/<view>.mask.png              8-bit projected vessel mask (0/255)
 ///   patients/<id>/views/<view>.overlap.png           vessel passages per pixel (mesh mode)
-///   patients/<id>/views/<view>.camera.json           camera, view class, angles
+///   patients/<id>/views/<view>.npy                   float32 line integrals (--line-integrals)
+///   patients/<id>/views/<view>.camera.json           camera, view class, angles, PNG window
 ///   patients/<id>/views/<view>.points.json           projected centerline points
 ///   patients/<id>/pairs/<pair>.json                  pair labels (dense, sparse, F, classes)
 ///   patients/<id>/timings.json                       seconds per stage (vary run to run)
@@ -80,7 +81,7 @@ class DatasetLayout {
     return patient_dir(patient) / "timings.json";
   }
 
-  /// A view's files: its stem plus ".png", ".mask.png", ".overlap.png", ".camera.json",
+  /// A view's files: its stem plus ".png", ".mask.png", ".overlap.png", ".npy", ".camera.json",
   /// ".points.json".
   std::filesystem::path view_stem(const std::string& patient, const std::string& view) const {
     return views_dir(patient) / view;
@@ -90,6 +91,13 @@ class DatasetLayout {
   }
   std::filesystem::path view_mask(const std::string& patient, const std::string& view) const {
     return with_suffix(patient, view, ".mask.png");
+  }
+  std::filesystem::path view_overlap(const std::string& patient, const std::string& view) const {
+    return with_suffix(patient, view, ".overlap.png");
+  }
+  std::filesystem::path view_line_integrals(const std::string& patient,
+                                            const std::string& view) const {
+    return with_suffix(patient, view, ".npy");
   }
   std::filesystem::path view_camera(const std::string& patient, const std::string& view) const {
     return with_suffix(patient, view, ".camera.json");

@@ -36,8 +36,12 @@ struct PairTruth {
   std::vector<Correspondence> dense;                          ///< GT labels: a, b (px), world (mm)
   std::shared_ptr<const Image<std::uint8_t>> mask_a, mask_b;  ///< nonzero = vessel
 
-  /// The coronary system: the view name's prefix before '_' ("RCA_00" -> "RCA").
-  std::string system() const { return view_a.substr(0, view_a.find('_')); }
+  /// The coronary system of the pair's view classes ("RCA", "LCA"; "" when the classes are
+  /// unknown).
+  std::string system() const {
+    return view_class_a == kUnknownViewClass ? std::string()
+                                             : to_string(view_class(view_class_a).system);
+  }
 };
 
 namespace detail {
@@ -123,7 +127,7 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
     t.view_b = j.at("view_b").get<std::string>();
     t.view_class_a = j.value("view_class_a", kUnknownViewClass);
     t.view_class_b = j.value("view_class_b", kUnknownViewClass);
-    t.F = detail::matrix_from_json<3, 3>(j, "F", where);
+    t.F = matrix_from_json<3, 3>(j, "F", where);
   } catch (const nlohmann::json::exception& e) {
     throw FormatError("gimm: " + where + ": " + e.what());
   }

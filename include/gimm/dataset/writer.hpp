@@ -12,6 +12,7 @@
 #include "gimm/dataset/layout.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
+#include "gimm/io/npy.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
@@ -69,7 +70,7 @@ inline nlohmann::json pair_json(const PairLabels& labels, const SampledView& a,
           {"view_b", name_b},
           {"view_class_a", a.view_class},
           {"view_class_b", b.view_class},
-          {"F", gimm::detail::matrix_to_json(labels.F)},
+          {"F", gimm::matrix_to_json(labels.F)},
           {"F_convention", "x_b^T F x_a = 0, pixels"},
           {"dense_fields",
            {"u_a", "v_a", "u_b", "v_b", "x_mm", "y_mm", "z_mm", "branch", "point", "radius_mm"}},
@@ -94,6 +95,7 @@ struct ViewFiles {
   Image<std::uint16_t> image;                    ///< the angiogram, 16-bit
   Image<std::uint8_t> mask;                      ///< nonzero = vessel (written 0/255)
   const Image<std::uint8_t>* overlap = nullptr;  ///< vessel passages per pixel (mesh mode)
+  const Image<float>* line_integrals = nullptr;  ///< float32 optical depth (optional)
   nlohmann::json camera;                         ///< camera, view class, angles
   nlohmann::json points;                         ///< view_points_json
 };
@@ -110,13 +112,14 @@ class DatasetWriter {
   }
 
   void write_view(const std::string& patient, const std::string& view, ViewFiles files) const {
-    const std::string stem = layout_.view_stem(patient, view).string();
-    write_png(stem + ".png", files.image);
+    write_png(layout_.view_image(patient, view), files.image);
     for (auto& px : files.mask.storage()) px = px ? 255 : 0;
-    write_png(stem + ".mask.png", files.mask);
-    if (files.overlap) write_png(stem + ".overlap.png", *files.overlap);
-    write_json_file(stem + ".camera.json", files.camera);
-    write_json_file(stem + ".points.json", files.points, -1);
+    write_png(layout_.view_mask(patient, view), files.mask);
+    if (files.overlap) write_png(layout_.view_overlap(patient, view), *files.overlap);
+    if (files.line_integrals)
+      write_npy(layout_.view_line_integrals(patient, view), *files.line_integrals);
+    write_json_file(layout_.view_camera(patient, view), files.camera);
+    write_json_file(layout_.view_points(patient, view), files.points, -1);
   }
 
   void write_pair(const std::string& patient, const std::string& pair,

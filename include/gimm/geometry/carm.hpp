@@ -24,15 +24,11 @@
 #include <cmath>
 #include <optional>
 
+#include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/camera.hpp"
 
 namespace gimm {
-
-constexpr double kPi = 3.14159265358979323846;
-inline double deg_to_rad(double deg) {
-  return deg * kPi / 180.0;
-}
 
 struct CArm {
   double primary_deg = 0.0;    ///< +LAO / -RAO, degrees

@@ -24,7 +24,7 @@
 
 namespace gimm {
 
-namespace detail {
+/// A matrix as JSON rows of numbers, a column vector as one flat array.
 template <class Derived>
 nlohmann::json matrix_to_json(const Eigen::MatrixBase<Derived>& m) {
   if (m.cols() == 1) {
@@ -71,18 +71,17 @@ Eigen::Matrix<double, R, C> matrix_from_json(const nlohmann::json& j, const char
   }
   return m;
 }
-}  // namespace detail
 
 inline nlohmann::json to_json(const Camerad& camera) {
   nlohmann::json j;
   j["model"] = to_string(camera.model());
   j["image_size"] = {{"rows", camera.rows()}, {"cols", camera.cols()}};
-  j["K"] = detail::matrix_to_json(camera.K());
-  j["R"] = detail::matrix_to_json(camera.R());
-  j["t"] = detail::matrix_to_json(camera.t());
-  j["P"] = detail::matrix_to_json(camera.P());
-  j["center"] = detail::matrix_to_json(camera.center());
-  j["principal_axis"] = detail::matrix_to_json(camera.principal_axis());
+  j["K"] = matrix_to_json(camera.K());
+  j["R"] = matrix_to_json(camera.R());
+  j["t"] = matrix_to_json(camera.t());
+  j["P"] = matrix_to_json(camera.P());
+  j["center"] = matrix_to_json(camera.center());
+  j["principal_axis"] = matrix_to_json(camera.principal_axis());
   return j;
 }
 
@@ -94,8 +93,8 @@ inline nlohmann::json to_json(const CArm& carm) {
   j["sid_mm"] = carm.sid_mm;
   j["sod_mm"] = carm.sod_mm;
   j["pixel_mm"] = carm.pixel_mm;
-  j["isocenter"] = detail::matrix_to_json(carm.isocenter);
-  j["principal_point"] = detail::matrix_to_json(carm.principal_point_or_centre());
+  j["isocenter"] = matrix_to_json(carm.isocenter);
+  j["principal_point"] = matrix_to_json(carm.principal_point_or_centre());
   return j;
 }
 
@@ -118,14 +117,14 @@ inline Camerad camera_from_json(const nlohmann::json& j, const std::string& wher
       model_name == "perspective" ? ProjectionModel::perspective : ProjectionModel::orthographic;
   Camerad camera;
   try {
-    camera = Camerad(model, detail::matrix_from_json<3, 3>(j, "K", where),
-                     detail::matrix_from_json<3, 3>(j, "R", where),
-                     detail::matrix_from_json<3, 1>(j, "t", where), rows, cols);
+    camera =
+        Camerad(model, matrix_from_json<3, 3>(j, "K", where), matrix_from_json<3, 3>(j, "R", where),
+                matrix_from_json<3, 1>(j, "t", where), rows, cols);
   } catch (const Error& e) {
     throw Error(std::string(e.what()) + " (in " + where + ")");
   }
   if (j.contains("P")) {
-    const Eigen::Matrix<double, 3, 4> P = detail::matrix_from_json<3, 4>(j, "P", where);
+    const Eigen::Matrix<double, 3, 4> P = matrix_from_json<3, 4>(j, "P", where);
     const double err = (P - camera.P()).cwiseAbs().maxCoeff();
     GIMM_CHECK(err <= 1e-6 * (1.0 + camera.P().cwiseAbs().maxCoeff()),
                where << ": 'P' disagrees with K [R | t] (max difference " << err << ")");

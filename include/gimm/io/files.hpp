@@ -89,7 +89,6 @@ inline std::vector<unsigned char> read_file_prefix(const std::filesystem::path& 
   return read_file_range(path, 0, static_cast<std::size_t>(std::min<std::uint64_t>(size, limit)));
 }
 
-namespace detail {
 /// "<host>.<pid>": names this process's temporary files apart from any other writer's.
 inline std::string process_tag() {
   char host[256] = {0};
@@ -98,11 +97,10 @@ inline std::string process_tag() {
     if (*c == '/') *c = '_';
   return std::string(host) + "." + std::to_string(static_cast<long>(::getpid()));
 }
-}  // namespace detail
 
 inline void write_file_atomic(const std::filesystem::path& path, const void* data,
                               std::size_t size) {
-  const std::filesystem::path tmp = path.string() + ".tmp." + detail::process_tag();
+  const std::filesystem::path tmp = path.string() + ".tmp." + process_tag();
   {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     GIMM_CHECK_AS(IoError, f != nullptr,

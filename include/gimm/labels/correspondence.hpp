@@ -47,7 +47,7 @@ struct ProjectedPoint {
   bool in_image = false;     ///< on the detector
   bool on_mask = false;      ///< the nearest pixel is on the 2D vessel mask
   int overlap = 0;           ///< vessel passages at that pixel (0 if no overlap map)
-  bool visible = true;       ///< no other vessel in front of it (set in mesh mode; else true)
+  bool visible = true;       ///< no other vessel passage between the source and the point
 
   bool valid() const { return in_front && in_image && on_mask; }
 };

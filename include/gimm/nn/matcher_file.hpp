@@ -10,7 +10,7 @@
 #include "gimm/nn/matcher.hpp"
 #include "gimm/nn/safetensors.hpp"
 
-namespace gimm::io {
+namespace gimm::nn {
 
 namespace detail {
 inline nn::LayerKind layer_kind(const nlohmann::json& j, const std::string& where) {
@@ -103,4 +103,4 @@ inline nn::Matcher load_matcher(const std::string& path) {
   return load_matcher(SafetensorsFile::load(path), path);
 }
 
-}  // namespace gimm::io
+}  // namespace gimm::nn

@@ -24,7 +24,7 @@
 #include "gimm/io/files.hpp"
 #include "gimm/nn/tensor.hpp"
 
-namespace gimm::io {
+namespace gimm::nn {
 
 struct SafetensorsEntry {
   std::string name, dtype;
@@ -378,4 +378,4 @@ inline void write_safetensors(const std::string& path,
   write_file_atomic(path, out.data(), out.size());
 }
 
-}  // namespace gimm::io
+}  // namespace gimm::nn

@@ -23,6 +23,7 @@
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
+#include "gimm/anatomy/isocenter.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"
@@ -45,12 +46,13 @@ struct DatasetOptions {
   std::uint64_t seed = 0;
   ViewMode view_mode = ViewMode::shared;
   CArm carm;  ///< detector, distances and model; angles come from the protocol
-  ContrastPreset recipe = ContrastPreset::angiography;
+  ContrastPreset preset = ContrastPreset::angiography;  ///< the contrast recipe's preset
   /// Tissue beyond the scan's axial coverage (padded_attenuation.hpp, docs/recipes.md): 0 = air.
   double pad_mm = kDefaultPadMm;
   Projector projector = Projector::siddon;
   VesselMode vessel_mode = VesselMode::voxel;
   std::size_t sparse_count = 20;
+  bool write_line_integrals = false;  ///< also each view's float32 line integrals (<view>.npy)
   double split_train = 0.70, split_val = 0.15;  ///< the rest is test
   double min_spur_mm = 3.0;
   /// A label with one tree only: make the system it is assigned to (split_coronary_systems'
@@ -61,24 +63,26 @@ struct DatasetOptions {
   /// of the files (not in to_json()).
   double warn_dropped_fraction = 0.05;
 
-  /// The detector and distances (angles and isocentre are set per view).
+  /// The detector and distances of every view (angles and isocentre are set per view).
   nlohmann::json carm_settings() const {
-    nlohmann::json j = gimm::to_json(carm);
-    for (const char* per_view :
-         {"P", "K", "R", "t", "center", "primary_deg", "secondary_deg", "isocenter"})
-      j.erase(per_view);
-    return j;
+    return {{"model", to_string(carm.model)},
+            {"image_size", {{"rows", carm.rows}, {"cols", carm.cols}}},
+            {"sid_mm", carm.sid_mm},
+            {"sod_mm", carm.sod_mm},
+            {"pixel_mm", carm.pixel_mm},
+            {"principal_point", matrix_to_json(carm.principal_point_or_centre())}};
   }
 
   nlohmann::json to_json() const {
     return {{"seed", seed},
             {"view_mode", gimm::to_string(view_mode)},
             {"carm", carm_settings()},
-            {"recipe", gimm::to_string(recipe)},
+            {"recipe", gimm::to_string(preset)},
             {"pad_mm", pad_mm},
             {"projector", gimm::to_string(projector)},
             {"vessel_mode", gimm::to_string(vessel_mode)},
             {"sparse_count", sparse_count},
+            {"line_integrals_npy", write_line_integrals},
             {"split", {split_train, split_val, 1 - split_train - split_val}},
             {"min_spur_mm", min_spur_mm},
             {"allow_single_system", allow_single_system},
@@ -307,6 +311,13 @@ inline std::string dropped_voxels_warning(const nlohmann::json& record, const Da
   return buf;
 }
 
+/// The random stream of one purpose and item of a patient ("views:LCA", "sparse:LCA_00_03"):
+/// each drawn on its own, so a change to one view or pair moves nothing else.
+inline Rng patient_stream(const DatasetOptions& o, const std::string& patient,
+                          const std::string& purpose) {
+  return Rng(o.seed).fork(stable_hash(patient + "/" + purpose));
+}
+
 /// A patient's CT (HU) and coronary label, on one grid.
 struct PatientVolumes {
   Volume<float> hu;
@@ -338,7 +349,7 @@ inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::u
                                     const DatasetOptions& o, const std::string& patient,
                                     const DenseTissue* dense) {
   RendererOptions ro;
-  ro.recipe.preset = o.recipe;
+  ro.recipe.preset = o.preset;
   ro.pad_mm = o.pad_mm;
   ro.projector = o.projector;
   ro.vessels = o.vessel_mode;
@@ -356,6 +367,14 @@ inline nlohmann::json view_camera_json(const CArm& carm, const SampledView& view
   return j;
 }
 
+/// How a view's 16-bit PNG maps back to intensity (camera.json "intensity_window").
+inline nlohmann::json intensity_window_json(const IntensityWindow& w) {
+  return {{"min", w.lo},
+          {"max", w.hi},
+          {"png", "intensity = min + (max - min) * value / 65535"},
+          {"intensity", "Beer-Lambert exp(-line integral), I0 = 1"}};
+}
+
 /// The rendered and labelled views of one system.
 struct SystemViews {
   std::vector<Camerad> cameras;
@@ -371,7 +390,7 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
                                        const CArm& settings, const Eigen::Vector3d& isocenter,
                                        const std::vector<LabelPoint>& points,
                                        const DatasetWriter& writer, const std::string& patient,
-                                       PatientTimings& t) {
+                                       bool write_line_integrals, PatientTimings& t) {
   SystemViews out;
   const bool mesh_mode = renderer.options().vessels == VesselMode::mesh;
   // Declared after everything the task reads, so an exception here waits for it first.
@@ -392,15 +411,18 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
     in_flight = std::async(std::launch::async, [&, view = std::move(view), cj = std::move(cj),
                                                 camera, name]() mutable {
       detail::Stopwatch writing;
-      auto labels = label_view(points, camera, &view.vessel_mask,
-                               mesh_mode ? &view.overlap : nullptr);
-      if (mesh_mode)
-        mark_occlusion(labels, points,
-                       [&](const Eigen::Vector3d& X) { return renderer.unoccluded(camera, X); });
-      writer.write_view(patient, name,
-                        {to_uint16_min_max(view.intensity()), std::move(view.vessel_mask),
-                         mesh_mode ? &view.overlap : nullptr, std::move(cj),
-                         view_points_json(points, labels)});
+      auto labels =
+          label_view(points, camera, &view.vessel_mask, mesh_mode ? &view.overlap : nullptr);
+      mark_occlusion(labels, points,
+                     [&](const Eigen::Vector3d& X) { return renderer.unoccluded(camera, X); });
+      IntensityWindow window;
+      Image<std::uint16_t> image = to_uint16_min_max(view.intensity(), &window);
+      cj["intensity_window"] = intensity_window_json(window);
+      writer.write_view(
+          patient, name,
+          {std::move(image), std::move(view.vessel_mask), mesh_mode ? &view.overlap : nullptr,
+           write_line_integrals ? &view.line_integrals : nullptr, std::move(cj),
+           view_points_json(points, labels)});
       t.writes += writing.lap();
       return labels;
     });
@@ -411,21 +433,23 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
   return out;
 }
 
-/// Step: labels and writes every pair of `plan`; returns the number of dense labels.
+/// Step: labels and writes every pair of `plan` (sparse points from the pair's own stream);
+/// returns the number of dense labels.
 inline std::size_t label_system_pairs(const ViewPlan& plan, const SystemViews& views,
                                       const std::vector<LabelPoint>& points,
-                                      const DatasetOptions& o, Rng& rng,
-                                      const DatasetWriter& writer, const std::string& patient,
-                                      PatientTimings& t) {
+                                      const DatasetOptions& o, const DatasetWriter& writer,
+                                      const std::string& patient, PatientTimings& t) {
   std::size_t dense_total = 0;
   detail::Stopwatch stage;
   for (const auto& pr : plan.pairs) {
+    const std::string name = pair_name(to_string(plan.system), pr.a, pr.b);
+    Rng sparse_stream = patient_stream(o, patient, "sparse:" + name);
     const PairLabels labels =
         label_pair(points, views.projected[pr.a], views.projected[pr.b], views.cameras[pr.a],
-                   views.cameras[pr.b], o.sparse_count, rng);
+                   views.cameras[pr.b], o.sparse_count, sparse_stream);
     dense_total += labels.dense.size();
     t.pairs += stage.lap();
-    writer.write_pair(patient, pair_name(to_string(plan.system), pr.a, pr.b),
+    writer.write_pair(patient, name,
                       pair_json(labels, plan.views[pr.a], plan.views[pr.b], views.names[pr.a],
                                 views.names[pr.b]));
     t.writes += stage.lap();
@@ -433,16 +457,9 @@ inline std::size_t label_system_pairs(const ViewPlan& plan, const SystemViews& v
   return dense_total;
 }
 
-/// The isocentre of a system's views: the mean of its centerline points (mm, LPS).
-inline Eigen::Vector3d centerline_centroid(const std::vector<LabelPoint>& points) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const auto& p : points) sum += p.world;
-  return sum / static_cast<double>(std::max<std::size_t>(1, points.size()));
-}
-
 /// The record of a system the label does not have (allow_single_system).
 inline nlohmann::json absent_system_record() {
-  return {{"present", false}, {"voxels", 0},           {"views", 0},
+  return {{"present", false}, {"voxels", 0},          {"views", 0},
           {"pairs", 0},       {"centerline_mm", 0.0}, {"dense_labels", 0}};
 }
 
@@ -466,7 +483,6 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   const DatasetWriter writer(out);
   writer.create_patient(src.id);
 
-  Rng rng = Rng(o.seed).fork(stable_hash(src.id));
   nlohmann::json record = {{"id", src.id},
                            {"split", src.split},
                            {"label", label_json(split)},
@@ -474,9 +490,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   if (src.phantom_seed) record["phantom_seed"] = *src.phantom_seed;
   // Bone or contrast (the angiography recipe's structure), found once for both systems.
   std::optional<DenseTissue> dense;
-  if (o.recipe == ContrastPreset::angiography) {
+  if (o.preset == ContrastPreset::angiography) {
     ContrastRecipe recipe;
-    recipe.preset = o.recipe;
+    recipe.preset = o.preset;
     dense = classify_dense_tissue(patient.hu, recipe);
   }
   t.attenuation += stage.lap();
@@ -500,13 +516,14 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     const ViewRenderer renderer =
         system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr);
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
-    const ViewPlan plan = plan_views(system, o.view_mode, rng);
-    const SystemViews views = render_system_views(renderer, plan, o.carm, centerline_centroid(points),
-                                                  points, writer, src.id, t);
+    Rng view_stream = patient_stream(o, src.id, std::string("views:") + to_string(system));
+    const ViewPlan plan = plan_views(system, o.view_mode, view_stream);
+    const SystemViews views =
+        render_system_views(renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id),
+                            points, writer, src.id, o.write_line_integrals, t);
     t.views += stage.lap();
     t.view_count += plan.views.size();
-    const std::size_t dense_total =
-        label_system_pairs(plan, views, points, o, rng, writer, src.id, t);
+    const std::size_t dense_total = label_system_pairs(plan, views, points, o, writer, src.id, t);
     stage.lap();
     record["systems"][to_string(system)] = {{"present", true},
                                             {"voxels", voxels},

@@ -96,7 +96,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   assign_splits(sources, options);
   fs::create_directories(out);
   {  // fail early, before any work, if the output is not writable
-    const fs::path probe = out / (".write-test." + detail::process_tag());
+    const fs::path probe = out / (".write-test." + process_tag());
     write_file_atomic(probe, std::string("ok"));
     fs::remove(probe);
   }

@@ -388,8 +388,8 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
                 {{"multi_branch",
                   {{"data", json::array({{{"categories", categories}, {"pts", *pts}}})}}}}}}}});
 
-      const json K1 = gimm::detail::matrix_to_json(p.a.camera.K());
-      const json K2 = gimm::detail::matrix_to_json(p.b.camera.K());
+      const json K1 = gimm::matrix_to_json(p.a.camera.K());
+      const json K2 = gimm::matrix_to_json(p.b.camera.K());
       dense_pairs[rf::dense_key(sys, p.a.view_name, p.b.view_name)] = {
           {"primary_A", p.a.primary_deg},
           {"secondary_A", p.a.secondary_deg},
@@ -407,8 +407,8 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
            {{"source", fs::relative(p.file, dataset_dir).generic_string()},
             {"camera_model", to_string(p.a.camera.model())},
             {"points_3d", "world mm (LPS), not voxel indices"},
-            {"P1", gimm::detail::matrix_to_json(p.a.camera.P())},
-            {"P2", gimm::detail::matrix_to_json(p.b.camera.P())},
+            {"P1", gimm::matrix_to_json(p.a.camera.P())},
+            {"P2", gimm::matrix_to_json(p.b.camera.P())},
             {"F", detail::ref_field(p.labels, "F", where)},
             {"F_convention", "x_B^T F x_A = 0, pixels"},
             {"view_class_A", p.a.view_class},

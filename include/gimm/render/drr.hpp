@@ -166,12 +166,20 @@ Image<std::uint8_t> project_mask(const Volume<T>& mask, const Camerad& camera,
   return project_unit_mask(unit_mask(mask), camera, min_chord_mm);
 }
 
-/// Min-max normalisation to the full 16-bit range (a constant image becomes 0), for PNG output.
-inline Image<std::uint16_t> to_uint16_min_max(const Image<float>& image) {
+/// The values a 16-bit image's 0 and 65535 stand for: value v means lo + (hi - lo) v / 65535.
+struct IntensityWindow {
+  double lo = 0, hi = 0;
+};
+
+/// Min-max normalisation to the full 16-bit range (a constant image becomes 0), for PNG output;
+/// the window used goes to `window` when given, so that intensities can be recovered.
+inline Image<std::uint16_t> to_uint16_min_max(const Image<float>& image,
+                                              IntensityWindow* window = nullptr) {
   Image<std::uint16_t> out(image.rows(), image.cols(), 0);
   if (image.empty()) return out;
   const auto [lo_it, hi_it] = std::minmax_element(image.storage().begin(), image.storage().end());
   const double lo = *lo_it, hi = *hi_it;
+  if (window) *window = {lo, hi};
   const double scale = hi > lo ? 65535.0 / (hi - lo) : 0.0;
   for (std::size_t p = 0; p < out.size(); ++p)
     out.data()[p] = static_cast<std::uint16_t>(std::lround((image.data()[p] - lo) * scale));

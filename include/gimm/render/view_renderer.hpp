@@ -48,7 +48,9 @@ inline VesselMode parse_vessel_mode(const std::string& s) {
   if (s == "mesh") return VesselMode::mesh;
   GIMM_FAIL("vessel mode must be voxel|mesh, got '" << s << "'");
 }
-inline const char* to_string(VesselMode m) { return m == VesselMode::mesh ? "mesh" : "voxel"; }
+inline const char* to_string(VesselMode m) {
+  return m == VesselMode::mesh ? "mesh" : "voxel";
+}
 
 struct RendererOptions {
   ContrastRecipe recipe;                    ///< HU -> mm^-1; preset none: the volume is mm^-1
@@ -86,6 +88,12 @@ class ViewRenderer {
                std::shared_ptr<const VesselSurface> surface = nullptr)
       : options_(options), surface_(std::move(surface)) {
     check_options(vessels, name);
+    if (vessels) {
+      // One grid: the injection, the vessel mask and the lumen gain index the CT voxel by voxel.
+      const std::string difference = grid_difference(volume.geometry(), vessels->geometry());
+      GIMM_CHECK(difference.empty(),
+                 name << ": the vessel mask's grid differs from the volume's: " << difference);
+    }
     if (options.recipe.preset == ContrastPreset::none) {
       GIMM_CHECK(!vessels, name << ": with the recipe 'none' the volume already is attenuation: "
                                    "it has no injection to add (give no vessel mask)");
@@ -116,8 +124,7 @@ class ViewRenderer {
     drr.step_mm = options_.step_mm;
     drr.empty_blocks = &mu_blocks_;
     RenderedView out;
-    out.line_integrals =
-        render_line_integrals(attenuation_.mu, attenuation_.pads, camera, drr);
+    out.line_integrals = render_line_integrals(attenuation_.mu, attenuation_.pads, camera, drr);
     if (surface_) {
       VesselProjection vp = surface_->project(camera);
       out.vessel_mask = Image<std::uint8_t>(camera.rows(), camera.cols(), 0);
@@ -164,9 +171,9 @@ class ViewRenderer {
   }
 
   void check_options(const Volume<std::uint8_t>* vessels, const std::string& name) const {
-    GIMM_CHECK(std::isfinite(options_.step_mm) && options_.step_mm >= 0,
-               name << ": step_mm must be >= 0 (0: the smallest voxel spacing), got "
-                    << options_.step_mm);
+    GIMM_CHECK(
+        std::isfinite(options_.step_mm) && options_.step_mm >= 0,
+        name << ": step_mm must be >= 0 (0: the smallest voxel spacing), got " << options_.step_mm);
     GIMM_CHECK(std::isfinite(options_.min_chord_mm) && options_.min_chord_mm > 0,
                name << ": min_chord_mm must be > 0, got " << options_.min_chord_mm);
     const bool mesh = options_.vessels == VesselMode::mesh;

@@ -1,0 +1,16 @@
+#pragma once
+/// The nn room: the small CPU inference engine (tensor, ops, safetensors) and the GIMM matcher.
+#include "gimm/nn/activations.hpp"
+#include "gimm/nn/attention.hpp"
+#include "gimm/nn/coarse_matching.hpp"
+#include "gimm/nn/conv2d.hpp"
+#include "gimm/nn/fast_exp.hpp"
+#include "gimm/nn/gemm.hpp"
+#include "gimm/nn/linear.hpp"
+#include "gimm/nn/matcher.hpp"
+#include "gimm/nn/matcher_file.hpp"
+#include "gimm/nn/positional_encoding.hpp"
+#include "gimm/nn/resample.hpp"
+#include "gimm/nn/safetensors.hpp"
+#include "gimm/nn/softmax.hpp"
+#include "gimm/nn/tensor.hpp"
