@@ -128,6 +128,13 @@ TEST_CASE("Camera JSON errors name the field and the source", "[geometry][io][ca
   j = good;
   j["image_size"]["cols"] = 0;
   fails_with(j, "480 x 0");
+  // Past int: refused with the value, not wrapped (4294967360 read as int is 64).
+  j = good;
+  j["image_size"]["rows"] = 4294967360ull;
+  fails_with(j, "rows is out of range: 4294967360");
+  j = good;
+  j["image_size"]["cols"] = -4294967296ll;
+  fails_with(j, "cols is out of range: -4294967296");
   j = good;
   j["P"][0][3] = j["P"][0][3].get<double>() + 1.0;
   fails_with(j, "'P' disagrees");

@@ -1,4 +1,5 @@
 // PNG (8/16-bit grey, RGB) and NPY round trips, byte layout, and bad-file errors.
+#include <zlib.h>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <filesystem>
@@ -67,6 +68,66 @@ TEST_CASE("PNG errors name the file", "[io][png]") {
   CHECK_THROWS_WITH(gimm::read_png16(q), Catch::Contains(q.string()));
   CHECK_THROWS_WITH(gimm::write_png(tmp_path("empty.png"), gimm::Image<std::uint8_t>()),
                     Catch::Contains("empty"));
+}
+
+TEST_CASE("PNG whose header claims more than its data can hold is refused before allocating",
+          "[io][png]") {
+  // A valid 1 x 1 16-bit PNG, then its IHDR rewritten to 32768 x 32768 (CRC fixed): libpng
+  // would allocate 2 GiB of rows before finding the data missing.
+  const auto p = tmp_path("huge_claim.png");
+  gimm::write_png(p, gimm::Image<std::uint16_t>(1, 1, 5));
+  auto bytes = gimm::read_file_bytes(p);
+  const auto put32 = [&](std::size_t at, std::uint32_t v) {
+    for (int b = 0; b < 4; ++b) bytes[at + b] = static_cast<unsigned char>(v >> (24 - 8 * b));
+  };
+  put32(16, 32768);  // width  (IHDR data starts at byte 16)
+  put32(20, 32768);  // height
+  put32(29, static_cast<std::uint32_t>(crc32(0, bytes.data() + 12, 17)));  // type + data
+  std::ofstream(p, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
+  CHECK_THROWS_WITH(gimm::read_png16(p), Catch::Contains(p.string()) &&
+                                             Catch::Contains("32768 x 32768") &&
+                                             Catch::Contains("compressed data can hold"));
+}
+
+namespace {
+/// A .npy file with the given header dict and `data_bytes` zero bytes of data.
+fs::path npy_with_header(const std::string& name, const std::string& dict, std::size_t data_bytes) {
+  std::string header = dict;
+  while ((10 + header.size() + 1) % 64) header += ' ';
+  header += '\n';
+  std::string file = std::string("\x93NUMPY\x01\x00", 8);
+  file += static_cast<char>(header.size() & 0xff);
+  file += static_cast<char>(header.size() >> 8);
+  file += header + std::string(data_bytes, '\0');
+  const auto p = tmp_path(name);
+  std::ofstream(p, std::ios::binary) << file;
+  return p;
+}
+}  // namespace
+
+TEST_CASE("NPY shapes are parsed exactly and checked against the file first", "[io][npy]") {
+  const std::string head = "{'descr': '<f4', 'fortran_order': False, 'shape': ";
+  // Each was read as another shape before: 1 x 1 (int wrap), 1 x 2 (third extent ignored).
+  CHECK_THROWS_WITH(
+      gimm::read_npy_image<float>(npy_with_header("wrap.npy", head + "(4294967297, 1), }", 4)),
+      Catch::Contains("wrap.npy") && Catch::Contains("4294967297"));
+  CHECK_THROWS_WITH(
+      gimm::read_npy_image<float>(npy_with_header("3d.npy", head + "(1, 2, 1), }", 8)),
+      Catch::Contains("3d.npy") && Catch::Contains("2D shape") && Catch::Contains("(1, 2, 1)"));
+  // 40 GB claimed by a 4-byte payload: the size error comes before any allocation.
+  CHECK_THROWS_WITH(
+      gimm::read_npy_image<float>(npy_with_header("big.npy", head + "(100000, 100000), }", 4)),
+      Catch::Contains("big.npy") && Catch::Contains("data size 4 bytes") &&
+          Catch::Contains("(100000, 100000)"));
+  CHECK_THROWS_WITH(gimm::read_npy_image<float>(npy_with_header("neg.npy", head + "(-1, 2), }", 0)),
+                    Catch::Contains("not a tuple of integers"));
+  CHECK_THROWS_WITH(gimm::read_npy_image<float>(npy_with_header("one.npy", head + "(4,), }", 16)),
+                    Catch::Contains("2D shape"));
+  // The exact form is still read.
+  const auto ok = gimm::read_npy_image<float>(npy_with_header("ok.npy", head + "(2, 3), }", 24));
+  CHECK((ok.rows() == 2 && ok.cols() == 3));
 }
 
 TEST_CASE("NPY float image: exact header bytes and round trip", "[io][npy]") {

@@ -195,6 +195,13 @@ TEST_CASE("NIfTI malformed files give errors naming the file and the problem", "
   b = good;
   patch<std::int32_t>(b, 0, 12345);
   require_format_error(b, "bad_sizeof.nii", "not a NIfTI-1 file");
+  // NIfTI-2 (sizeof_hdr 540) in this host's byte order and swapped: both get the hint.
+  b = good;
+  patch<std::int32_t>(b, 0, 540);
+  require_format_error(b, "nifti2_native.nii", "it is a NIfTI-2 file");
+  b = good;
+  patch<std::int32_t>(b, 0, 0x1c020000);  // 540 = 0x0000021c with its bytes reversed
+  require_format_error(b, "nifti2_swapped.nii", "it is a NIfTI-2 file");
   b = good;
   b.resize(b.size() - 7);
   require_format_error(b, "truncated.nii", "truncated");

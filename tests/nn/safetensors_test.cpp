@@ -276,6 +276,13 @@ TEST_CASE("safetensors entry errors name the tensor and the value", "[io][safete
                       {"bad extent 9223372036854775808"});
   require_entry_error(R"({"dtype":"F32","shape":[4294967296,4294967296,4],"data_offsets":[0,4]})",
                       4, {"too large"});
+  // No element, but strides that overflow int64 (2^62 * 2^62): refused at parse time, before a
+  // Tensor computes them (UBSan: signed overflow in Tensor::update_strides).
+  require_entry_error(
+      R"({"dtype":"F32","shape":[0,4611686018427387904,4611686018427387904],"data_offsets":[0,0]})",
+      0, {"too large", "[0,4611686018427387904,4611686018427387904]"});
+  require_entry_error(R"({"dtype":"F32","shape":[0,2199023255553],"data_offsets":[0,0]})", 0,
+                      {"too large"});
   for (const std::string offsets : {"[0]", "[0,4,8]", "[0,\"4\"]", "[-1,4]", "[0,4.0]", "{}"})
     require_entry_error(R"({"dtype":"F32","shape":[1],"data_offsets":)" + offsets + "}", 4,
                         {"two non-negative integers", offsets});

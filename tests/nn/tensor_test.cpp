@@ -57,6 +57,9 @@ TEST_CASE("Tensor: from data, and construction errors", "[nn][tensor]") {
                       Contains("7 values do not fill shape [2, 3]"));
   REQUIRE_THROWS_WITH(Tensor({2, -1}), Contains("negative extent in shape [2, -1]"));
   REQUIRE_THROWS_WITH(Tensor({1 << 21, 1 << 21}), Contains("too large"));
+  // No element, yet strides past int64: refused as well.
+  REQUIRE_THROWS_WITH(Tensor({0, std::int64_t{1} << 62, std::int64_t{1} << 62}),
+                      Contains("too large"));
   CHECK(gimm::nn::shape_string({2, 64, 32, 32}) == "[2, 64, 32, 32]");
   CHECK(gimm::nn::shape_string({}) == "[]");
   CHECK(gimm::nn::shape_numel({}) == 1);

@@ -14,6 +14,7 @@
 /// }
 /// Reading checks every field and names the bad one; K, R, t define the camera and "P",
 /// when present, must agree with them.
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -111,8 +112,18 @@ inline Camerad camera_from_json(const nlohmann::json& j, const std::string& wher
                  j["image_size"]["rows"].is_number_integer() &&
                  j["image_size"]["cols"].is_number_integer(),
              where << ": 'image_size' must be {\"rows\": int, \"cols\": int}");
-  const int rows = j["image_size"]["rows"].get<int>();
-  const int cols = j["image_size"]["cols"].get<int>();
+  // Read wide and range-checked: get<int> would wrap 4294967360 to 64. The camera checks the
+  // size itself once it is an int.
+  const auto side = [&](const char* key) {
+    const nlohmann::json& v = j["image_size"][key];
+    const bool fits = v.is_number_unsigned()
+                          ? v.get<std::uint64_t>() <= std::uint64_t(std::numeric_limits<int>::max())
+                          : v.get<std::int64_t>() >= std::numeric_limits<int>::min();
+    GIMM_CHECK(fits, where << ": 'image_size' " << key << " is out of range: " << v.dump());
+    return static_cast<int>(v.get<std::int64_t>());
+  };
+  const int rows = side("rows");
+  const int cols = side("cols");
   const auto model =
       model_name == "perspective" ? ProjectionModel::perspective : ProjectionModel::orthographic;
   Camerad camera;

@@ -190,10 +190,17 @@ inline NiftiHeader parse_nifti_header(const unsigned char* head, std::size_t hea
   std::memcpy(&sizeof_hdr, head, 4);
   NiftiHeader out;
   if (sizeof_hdr != 348) {
-    swap_bytes(reinterpret_cast<unsigned char*>(&sizeof_hdr), 4);
+    std::int32_t swapped = sizeof_hdr;
+    swap_bytes(reinterpret_cast<unsigned char*>(&swapped), 4);
+    // NIfTI-2 says 540 here, in either byte order.
+    const bool nifti2 = sizeof_hdr == 540 || swapped == 540;
+    sizeof_hdr = swapped;
     GIMM_CHECK_AS(FormatError, sizeof_hdr == 348,
                   "'" << what << "': not a NIfTI-1 file (sizeof_hdr is not 348"
-                      << (sizeof_hdr == 540 ? "; NIfTI-2 is not supported" : "") << ")");
+                      << (nifti2 ? "; it is a NIfTI-2 file (540), which gimm does not read: "
+                                   "convert it to NIfTI-1, e.g. with nibabel or plastimatch"
+                                 : "")
+                      << ")");
     out.byte_swapped = true;
   }
   const char* magic = reinterpret_cast<const char*>(head) + 344;

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -63,6 +64,40 @@ void write_npy(const std::filesystem::path& path, const Image<T>& image) {
   write_npy(path, image.data(), {image.rows(), image.cols()});
 }
 
+namespace detail {
+/// The extents of an NPY shape tuple's inside ("3, 4" or "5," or ""): non-negative decimal
+/// integers, each in range; anything else is an error naming the file.
+inline std::vector<std::uint64_t> npy_shape_extents(const std::string& inside,
+                                                    const std::string& what) {
+  std::vector<std::uint64_t> out;
+  std::size_t k = 0;
+  const auto skip_spaces = [&] {
+    while (k < inside.size() && inside[k] == ' ') ++k;
+  };
+  skip_spaces();
+  while (k < inside.size()) {
+    std::uint64_t v = 0;
+    std::size_t digits = 0;
+    for (; k < inside.size() && inside[k] >= '0' && inside[k] <= '9'; ++k, ++digits) {
+      GIMM_CHECK_AS(FormatError, v <= (std::numeric_limits<std::uint64_t>::max() - 9) / 10,
+                    "'" << what << "': shape extent in (" << inside << ") is too large");
+      v = v * 10 + static_cast<std::uint64_t>(inside[k] - '0');
+    }
+    GIMM_CHECK_AS(FormatError, digits > 0,
+                  "'" << what << "': shape (" << inside << ") is not a tuple of integers");
+    out.push_back(v);
+    skip_spaces();
+    if (k < inside.size()) {
+      GIMM_CHECK_AS(FormatError, inside[k] == ',',
+                    "'" << what << "': shape (" << inside << ") is not a tuple of integers");
+      ++k;
+      skip_spaces();
+    }
+  }
+  return out;
+}
+}  // namespace detail
+
 /// Reads a 2D .npy of element type T (exactly; no conversion) into an Image.
 template <class T>
 Image<T> read_npy_image(const std::filesystem::path& path) {
@@ -84,16 +119,29 @@ Image<T> read_npy_image(const std::filesystem::path& path) {
                 "'" << what << "': Fortran-order arrays are not supported");
   const auto open = header.find("'shape': (");
   GIMM_CHECK_AS(FormatError, open != std::string::npos, "'" << what << "': no shape: " << header);
-  long rows = -1, cols = -1;
-  GIMM_CHECK_AS(FormatError,
-                std::sscanf(header.c_str() + open + 10, "%ld, %ld)", &rows, &cols) == 2 &&
-                    rows >= 0 && cols >= 0,
-                "'" << what << "': expected a 2D shape, got " << header);
+  const auto close = header.find(')', open);
+  GIMM_CHECK_AS(FormatError, close != std::string::npos,
+                "'" << what << "': unterminated shape: " << header);
+  const std::vector<std::uint64_t> shape =
+      detail::npy_shape_extents(header.substr(open + 10, close - open - 10), what);
+  GIMM_CHECK_AS(FormatError, shape.size() == 2,
+                "'" << what << "': expected a 2D shape (rows, cols), got "
+                    << header.substr(open + 9, close - open - 8));
+  const std::uint64_t rows = shape[0], cols = shape[1];
+  constexpr std::uint64_t kMaxSide = std::numeric_limits<int>::max();
+  GIMM_CHECK_AS(FormatError, rows <= kMaxSide && cols <= kMaxSide,
+                "'" << what << "': shape (" << rows << ", " << cols << ") exceeds " << kMaxSide
+                    << " per side");
+  // The data size is checked against the file before the image is allocated.
+  const std::uint64_t data_bytes = bytes.size() - 10 - header_size;
+  GIMM_CHECK_AS(FormatError, cols == 0 || rows <= data_bytes / sizeof(T) / cols,
+                "'" << what << "': data size " << data_bytes << " bytes does not match shape ("
+                    << rows << ", " << cols << ")");
+  GIMM_CHECK_AS(FormatError, rows * cols * sizeof(T) == data_bytes,
+                "'" << what << "': data size " << data_bytes << " bytes does not match shape ("
+                    << rows << ", " << cols << ")");
   Image<T> image(static_cast<int>(rows), static_cast<int>(cols));
   const std::size_t payload = image.size() * sizeof(T);
-  GIMM_CHECK_AS(FormatError, bytes.size() == 10 + header_size + payload,
-                "'" << what << "': data size " << bytes.size() - 10 - header_size
-                    << " bytes does not match shape (" << rows << ", " << cols << ")");
   std::memcpy(image.data(), bytes.data() + 10 + header_size, payload);
   return image;
 }

@@ -30,8 +30,16 @@ namespace detail {
 struct PngIo {
   std::vector<unsigned char>* buffer = nullptr;  // written bytes, or the bytes being read
   std::size_t read_offset = 0;
+  /// Reading: the most decoded bytes the file can hold (checked before allocating them).
+  std::size_t max_decoded_bytes = static_cast<std::size_t>(-1);
   char error[256] = {0};
 };
+
+/// The most grey bytes a PNG of `file_bytes` can decode to: deflate expands at most 1032:1, and
+/// a 1-bit image becomes 8 bits per pixel here; 64 KiB of slack for tiny files.
+inline std::size_t png_max_decoded_bytes(std::size_t file_bytes) {
+  return file_bytes * 1032 * 8 + (std::size_t{1} << 16);
+}
 
 inline void png_on_error(png_structp png, png_const_charp message) {
   auto* io = static_cast<PngIo*>(png_get_error_ptr(png));
@@ -139,6 +147,8 @@ inline bool png_decode(PngIo& io, PngDecoded& out) {
   const std::size_t row_bytes = png_get_rowbytes(png, info);
   if (row_bytes != static_cast<std::size_t>(out.cols) * (out.bit_depth / 8))
     png_error(png, "unexpected row size after conversion to grey");
+  if (row_bytes > io.max_decoded_bytes / static_cast<std::size_t>(out.rows))
+    png_error(png, "its header's image size is more than its compressed data can hold");
   out.pixels.resize(row_bytes * static_cast<std::size_t>(out.rows));
   for (int pass = 0; pass < passes; ++pass)
     for (int r = 0; r < out.rows; ++r)
@@ -154,9 +164,14 @@ inline PngDecoded read_png_any(const std::filesystem::path& path) {
                 "'" << path.string() << "' is not a PNG file (bad signature)");
   PngIo io;
   io.buffer = &bytes;
+  io.max_decoded_bytes = png_max_decoded_bytes(bytes.size());
   PngDecoded out;
   GIMM_CHECK_AS(FormatError, png_decode(io, out),
-                "cannot decode PNG '" << path.string() << "': " << io.error);
+                "cannot decode PNG '" << path.string() << "' (" << bytes.size() << " bytes"
+                                      << (out.rows > 0 ? ", header " + std::to_string(out.rows) +
+                                                             " x " + std::to_string(out.cols)
+                                                       : std::string())
+                                      << "): " << io.error);
   GIMM_CHECK_AS(FormatError, out.rows > 0 && out.cols > 0,
                 "'" << path.string() << "' is an empty image");
   return out;

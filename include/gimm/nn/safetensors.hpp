@@ -280,7 +280,8 @@ class SafetensorsFile {
     const auto& shape = value["shape"];
     GIMM_CHECK_AS(FormatError, shape.is_array(),
                   tensor << "shape is not an array: " << shape.dump());
-    // Element count with overflow checks; any zero extent makes it 0.
+    // Element count with overflow checks; any zero extent makes it 0, but the other extents
+    // must still multiply in range: a tensor's strides are their products.
     std::uint64_t numel = 1;
     bool zero = false, overflow = false;
     for (const auto& d : shape) {
@@ -293,12 +294,13 @@ class SafetensorsFile {
       const std::uint64_t extent = d.get<std::uint64_t>();
       e.shape.push_back(static_cast<std::int64_t>(extent));
       zero = zero || extent == 0;
-      if (extent != 0 && numel > std::numeric_limits<std::uint64_t>::max() / element / extent)
+      if (extent == 0) continue;
+      if (numel > std::numeric_limits<std::uint64_t>::max() / element / extent)
         overflow = true;
       else
         numel *= extent;
     }
-    GIMM_CHECK_AS(FormatError, zero || !overflow,
+    GIMM_CHECK_AS(FormatError, !overflow && numel <= (std::uint64_t{1} << 40),
                   tensor << "shape " << shape.dump() << " is too large");
     if (zero) numel = 0;
 

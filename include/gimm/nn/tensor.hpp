@@ -29,11 +29,15 @@ inline std::string shape_string(const Shape& shape) {
 
 /// Number of elements of a shape; throws on a negative extent or an overflowing product.
 inline std::int64_t shape_numel(const Shape& shape) {
-  std::int64_t n = 1;
+  // The strides multiply every extent but the first, so the product of the non-zero extents
+  // must stay in range too: [0, 2^62, 2^62] has no element but overflows its strides.
+  std::int64_t n = 1, span = 1;
   for (std::int64_t d : shape) {
     GIMM_CHECK(d >= 0, "tensor: negative extent in shape " << shape_string(shape));
-    GIMM_CHECK(d == 0 || n <= (std::int64_t{1} << 40) / d,
+    const std::int64_t extent = d == 0 ? 1 : d;
+    GIMM_CHECK(span <= (std::int64_t{1} << 40) / extent,
                "tensor: shape " << shape_string(shape) << " is too large");
+    span *= extent;
     n *= d;
   }
   return n;
