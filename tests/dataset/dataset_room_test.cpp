@@ -85,6 +85,28 @@ TEST_CASE("Dataset reader: the manifest's format is checked", "[dataset]") {
   CHECK(gimm::DatasetReader(root).pair_ids().empty());
 }
 
+TEST_CASE("Dataset reader: wrong JSON types and huge numbers name the file and the key",
+          "[dataset]") {
+  const fs::path root = fresh("types");
+  fs::create_directories(root / "patients");
+  const std::string manifest = (root / "manifest.json").string();
+  // Raw nlohmann messages before ("cannot use value() with number"), naming neither.
+  gimm::write_json_file(root / "manifest.json",
+                        {{"format", gimm::kDatasetFormat}, {"patients", 7}});
+  CHECK_THROWS_WITH(gimm::DatasetReader(root).patients(),
+                    Catch::Contains(manifest) && Catch::Contains("'patients' must be an array") &&
+                        Catch::Contains("7"));
+  gimm::write_json_file(root / "manifest.json",
+                        {{"format", gimm::kDatasetFormat}, {"patients", {{{"id", 3}}}}});
+  CHECK_THROWS_WITH(gimm::DatasetReader(root).patients(),
+                    Catch::Contains(manifest) && Catch::Contains("'patients'[0]"));
+  // A number beyond double range is nlohmann's out_of_range, not a parse_error: it escaped.
+  gimm::write_file_atomic(root / "manifest.json", std::string("{\"format\": 1e999}"));
+  CHECK_THROWS_AS(gimm::DatasetReader(root), gimm::FormatError);
+  CHECK_THROWS_WITH(gimm::DatasetReader(root),
+                    Catch::Contains(manifest) && Catch::Contains("1e999"));
+}
+
 TEST_CASE("Dataset merge: shards of one run only", "[dataset]") {
   const fs::path root = fresh("merge");
   const gimm::DatasetWriter writer(root);

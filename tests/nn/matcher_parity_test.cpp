@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "gimm/nn/matcher_file.hpp"
@@ -151,6 +152,19 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   CHECK_THROWS_WITH(
       gimm::nn::load_matcher(write_variant("shape.safetensors", "", "", "down_proj.weight")),
       Catch::Contains("down_proj.weight"));
+
+  // A NaN or inf weight is refused at load, naming the tensor, the value and its index.
+  for (const float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    std::vector<gimm::nn::Tensor> poisoned = tensors;
+    poisoned[1].data()[2] = bad;
+    std::vector<std::pair<std::string, const gimm::nn::Tensor*>> list;
+    for (std::size_t i = 0; i < names.size(); ++i) list.emplace_back(names[i], &poisoned[i]);
+    gimm::nn::write_safetensors(dir + "/nonfinite.safetensors", list, weights.metadata());
+    CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/nonfinite.safetensors"),
+                      Catch::Contains(names[1]) && Catch::Contains("non-finite") &&
+                          Catch::Contains("at index 2"));
+  }
 
   // A config that disagrees with the tensors (wider coarse stage) fails on the first tensor.
   auto meta = weights.metadata();

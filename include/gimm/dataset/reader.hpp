@@ -170,11 +170,20 @@ class DatasetReader {
     namespace fs = std::filesystem;
     std::vector<std::string> patients;
     if (!manifest_.is_null()) {
-      try {
-        for (const auto& p : manifest_.at("patients"))
-          if (p.value("status", "") == "ok") patients.push_back(p.at("id").get<std::string>());
-      } catch (const nlohmann::json::exception& e) {
-        throw FormatError("gimm: " + layout_.manifest().string() + ": " + e.what());
+      const std::string where = layout_.manifest().string();
+      const auto* list = manifest_.contains("patients") ? &manifest_["patients"] : nullptr;
+      GIMM_CHECK_AS(FormatError, list && list->is_array(),
+                    where << ": 'patients' must be an array of patient records, got "
+                          << (list ? list->dump() : std::string("nothing")));
+      for (std::size_t k = 0; k < list->size(); ++k) {
+        const nlohmann::json& p = (*list)[k];
+        GIMM_CHECK_AS(FormatError,
+                      p.is_object() && p.contains("id") && p["id"].is_string() &&
+                          (!p.contains("status") || p["status"].is_string()),
+                      where << ": 'patients'[" << k
+                            << "] must be an object with a string 'id' and 'status', got "
+                            << p.dump());
+        if (p.value("status", "") == "ok") patients.push_back(p["id"].get<std::string>());
       }
     } else {
       for (const auto& e : fs::directory_iterator(layout_.patients_dir()))

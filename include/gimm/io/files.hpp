@@ -131,7 +131,7 @@ inline nlohmann::json read_json_file(const std::filesystem::path& path) {
   const auto bytes = read_file_bytes(path);
   try {
     return nlohmann::json::parse(bytes.begin(), bytes.end());
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {  // parse errors, and numbers like 1e999
     throw FormatError("gimm: '" + path.string() + "' is not valid JSON: " + e.what());
   }
 }

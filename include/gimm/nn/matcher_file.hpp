@@ -2,6 +2,7 @@
 /// Loads a GIMM matcher from safetensors: the config from __metadata__["gimm_config"] (the
 /// JSON that tools/train/gimm_model.py writes), then every tensor the model needs, checked for
 /// shape; a file with a missing or an extra tensor is refused, naming it.
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
@@ -93,7 +94,14 @@ inline nn::Matcher load_matcher(const SafetensorsFile& file, const std::string& 
                       [&](const std::string& name, const nn::Shape& shape) {
                         GIMM_CHECK_AS(FormatError, file.contains(name),
                                       where << ": missing tensor '" << name << "'");
-                        return file.tensor(name, shape);
+                        nn::Tensor t = file.tensor(name, shape);
+                        // A NaN or inf weight poisons every match (and the fast exp's bit
+                        // tricks): refused at load, naming the first one.
+                        for (std::int64_t i = 0; i < t.numel(); ++i)
+                          GIMM_CHECK_AS(FormatError, std::isfinite(t.data()[i]),
+                                        where << ": tensor '" << name << "' has a non-finite "
+                                              << "weight " << t.data()[i] << " at index " << i);
+                        return t;
                       });
   file.expect_names(matcher.tensor_names());
   return matcher;
