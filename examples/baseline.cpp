@@ -13,8 +13,8 @@
 #include "gimm/match/baselines.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-baseline: oracle and exact-epipolar baseline matches for gimm-eval"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-baseline: oracle and exact-epipolar baseline matches for gimm-eval",
+               "gimm-baseline"};
   std::string dataset, method, out, split = "all";
   double sigma = 1.0;
   std::uint64_t seed = 0;

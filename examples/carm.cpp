@@ -9,8 +9,7 @@
 #include "gimm/labels/views.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-carm: C-arm cameras (P = K[R|t]) as JSON"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-carm: C-arm cameras (P = K[R|t]) as JSON", "gimm-carm"};
   gimm::CArm carm;
   gimm::cli::CArmFlags flags;
   flags.add(app, carm, false);

@@ -12,8 +12,8 @@
 #include "gimm/io/volume_file.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-centerlines: coronary centerlines (LCA and RCA) of a label volume"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-centerlines: coronary centerlines (LCA and RCA) of a label volume",
+               "gimm-centerlines"};
   std::string label_path, out_path, truth_path;
   double tolerance = 1.5;
   gimm::SkeletonOptions options;

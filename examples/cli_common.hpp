@@ -1,6 +1,8 @@
 #pragma once
 // Shared CLI plumbing for the example programs: C-arm flags, error reporting, main wrapper.
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
@@ -10,6 +12,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/carm.hpp"
+#include "gimm/version.hpp"
 
 namespace gimm::cli {
 
@@ -82,14 +85,97 @@ struct CArmFlags {
   }
 };
 
-/// Runs `body`; CLI11 parse errors print usage and exit non-zero, gimm and std errors print
-/// "error: ..." and exit 1.
+/// Refuses a FLOAT value that is not a finite double. CLI11 reads floats with strtold, which
+/// takes "nan" and "inf", and a value beyond double's range ("1e999") becomes inf when narrowed;
+/// CLI11's range checks all compare false with NaN and let it through. (gimm's float options are
+/// all double.) No description: the help keeps reading "FLOAT".
+inline const CLI::Validator Finite(
+    [](std::string& input) -> std::string {
+      char* end = nullptr;
+      const long double value = std::strtold(input.c_str(), &end);
+      if (end == input.c_str() || *end != '\0') return {};  // not a number: CLI11 says so
+      if (!std::isfinite(static_cast<double>(value)))
+        return "must be a finite number, got " + input;
+      return {};
+    },
+    "", "Finite");
+
+/// Refuses an integer CLI11 would wrap or saturate: strtoull reads "-1" as 2^64-1, and both
+/// strtoull and strtoll clamp an out-of-range value to the type's limit without complaint.
+inline CLI::Validator integer_in_range(bool is_unsigned) {
+  return CLI::Validator(
+      [is_unsigned](std::string& input) -> std::string {
+        const char* s = input.c_str();
+        while (*s == ' ' || *s == '\t') ++s;
+        if (is_unsigned && *s == '-') return "must be a non-negative integer, got " + input;
+        char* end = nullptr;
+        errno = 0;
+        if (is_unsigned)
+          static_cast<void>(std::strtoull(s, &end, 0));
+        else
+          static_cast<void>(std::strtoll(s, &end, 0));
+        if (end == s || *end != '\0') return {};  // not an integer: CLI11 says so
+        if (errno == ERANGE) return "out of range, got " + input;
+        return {};
+      },
+      "", is_unsigned ? "NonNegativeInteger" : "Integer");
+}
+
+/// CLI11's type name of `option` ("FLOAT", "UINT", "INT", ...), without its validators'.
+inline std::string base_type_name(const CLI::Option& option) {
+  const std::string full = option.get_type_name();
+  return full.substr(0, full.find(':'));
+}
+
+/// The numeric contract of every gimm CLI, applied to every option of `app` and its subcommands
+/// by type: FLOAT (double, and vectors of it) must be finite, UINT (any unsigned) must
+/// not be negative, and no integer may overflow its type. One place, so an option added later
+/// cannot miss it.
+inline void check_numbers(CLI::App& app) {
+  for (CLI::Option* option : app.get_options()) {
+    const std::string type = base_type_name(*option);
+    if (type == "FLOAT")
+      option->check(Finite);
+    else if (type == "UINT" || type == "INT")
+      option->check(integer_in_range(type == "UINT"));
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) check_numbers(*sub);
+}
+
+/// The program's name for messages: the App's name, else argv[0] without its folder.
+inline std::string program_name(const CLI::App& app, int argc, char** argv) {
+  if (!app.get_name().empty()) return app.get_name();
+  return argc > 0 ? std::filesystem::path(argv[0]).filename().string() : std::string("gimm");
+}
+
+/// The command-line contract of every gimm CLI: parses `argv` into `app`, then runs `body`.
+/// - --help prints the help, --version prints "<name> <version>"; both exit 0 (stdout).
+/// - A usage error (unknown flag, missing or malformed value, failed check, non-finite float,
+///   negative unsigned) prints one line "error: <what, naming the flag>" and exits 2.
+/// - gimm and std errors thrown by `body` print "error: ..." and exit 1.
 template <class Body>
 int run(CLI::App& app, int argc, char** argv, Body&& body) {
+  const std::string name = program_name(app, argc, argv);
+  app.set_version_flag("--version", name + " " GIMM_VERSION_STRING);
+  check_numbers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    // CLI11 checks required options before unknown ones, though a mistyped required flag is the
+    // unknown one: name that. (And CLI11 lists unknown arguments last first: list them in order.)
+    const std::vector<std::string> extras = app.remaining(true);
+    std::string what = e.what();
+    if (!extras.empty() && (dynamic_cast<const CLI::ExtrasError*>(&e) ||
+                            dynamic_cast<const CLI::RequiredError*>(&e))) {
+      what = extras.size() > 1 ? "The following arguments were not expected:"
+                               : "The following argument was not expected:";
+      for (const auto& arg : extras) what += " " + arg;
+    }
+    for (char& c : what)
+      if (c == '\n' || c == '\r') c = ' ';
+    std::cerr << "error: " << what << " (see " << name << " --help)\n";
+    return 2;
   }
   try {
     return body();

@@ -15,8 +15,7 @@
 #include "gimm/pipeline/dataset_run.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels", "gimm-dataset"};
   gimm::DatasetOptions options;
   gimm::cli::CArmFlags flags;
   std::string input, out, shard_flag, view_mode = "shared", vessel_mode = "voxel",

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "gimm/anatomy/attenuation.hpp"
@@ -26,8 +27,7 @@
 #include "gimm/render/view_renderer.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-drr: a simulated angiogram of a CT volume under one C-arm view"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-drr: a simulated angiogram of a CT volume under one C-arm view", "gimm-drr"};
   gimm::CArm carm;
   gimm::cli::CArmFlags flags;
   flags.add(app, carm, true);
@@ -77,10 +77,9 @@ int main(int argc, char** argv) {
     std::optional<gimm::Volume<std::uint8_t>> injected;
     if (!label_path.empty()) {
       const auto label = gimm::read_volume<std::uint8_t>(label_path);
-      GIMM_CHECK(label.dims() == ct.dims(),
-                 "gimm-drr: label '" << label_path << "' grid " << label.nx() << "x" << label.ny()
-                                     << "x" << label.nz() << " differs from the volume grid "
-                                     << ct.nx() << "x" << ct.ny() << "x" << ct.nz());
+      // The dataset's grid check: dims, spacing, origin and direction.
+      gimm::check_same_grid(ct.geometry(), label.geometry(),
+                            "gimm-drr: '" + volume_path + "' and '" + label_path + "'");
       auto split = gimm::split_coronary_systems(label, {}, label_path);
       injected = gimm::parse_coronary_system(system_name) == gimm::CoronarySystem::LCA
                      ? std::move(split.lca)
@@ -119,10 +118,19 @@ int main(int argc, char** argv) {
                           {"mu_water_per_mm", recipe.mu_water},
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
-    gimm::write_npy(out_prefix + ".npy", line_integrals);
-    gimm::write_png(out_prefix + ".png",
-                    gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals)));
-    gimm::write_json_file(out_prefix + ".camera.json", camera_json);
+    // All or nothing: each file is written atomically, and if a later one fails (a full disk)
+    // the earlier ones of this command are removed.
+    const std::vector<std::string> outputs = {out_prefix + ".npy", out_prefix + ".png",
+                                              out_prefix + ".camera.json"};
+    try {
+      gimm::write_npy(outputs[0], line_integrals);
+      gimm::write_png(outputs[1], gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals)));
+      gimm::write_json_file(outputs[2], camera_json);
+    } catch (...) {
+      std::error_code ignored;
+      for (const auto& path : outputs) std::filesystem::remove(path, ignored);
+      throw;
+    }
     const auto t_done = std::chrono::steady_clock::now();
     auto ms = [](auto a, auto b) {
       return std::chrono::duration<double, std::milli>(b - a).count();

@@ -218,8 +218,7 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-eval: score predicted matches with the reference protocol"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-eval: score predicted matches with the reference protocol", "gimm-eval"};
   std::string dataset, predictions, out, name, split = "all";
   std::vector<std::string> runs;
   long top_k = 20;

@@ -116,8 +116,8 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)",
+               "gimm-match"};
   std::string image_a, image_b, weights, camera_a, camera_b, gate = "hard", out, picture, pair;
   std::string dataset, split = "all", geometry = "cameras", method = "learned";
   double sigma = 1.0;

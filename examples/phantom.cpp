@@ -50,8 +50,8 @@ gimm::Image<std::uint8_t> coronal_mip(const gimm::Volume<std::int16_t>& hu) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"gimm-phantom: a procedural CCTA patient (HU, coronary label, centerlines)"};
-  app.failure_message(CLI::FailureMessage::help);
+  CLI::App app{"gimm-phantom: a procedural CCTA patient (HU, coronary label, centerlines)",
+               "gimm-phantom"};
   std::uint64_t seed = 0;
   std::string out_dir, size = "small", dominance = "auto";
   double noise = 15.0;

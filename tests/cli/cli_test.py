@@ -12,6 +12,7 @@ import sys
 import nibabel as nib
 import numpy as np
 
+from flag_contract import check_flags
 from harness import Harness
 
 BIN, TMP = sys.argv[1], sys.argv[2]
@@ -25,6 +26,9 @@ def run(*args, ok=True, contains=None):
 
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
+
+# Every CLI: --help, --version, usage errors (exit 2, one line), non-finite and negative numbers.
+check_flags(check, BIN, TMP)
 
 # gimm-carm: JSON fields, conventions, bad flags.
 cam = json.loads(run("gimm-carm", "--primary", 30, "--secondary", 20))
@@ -95,6 +99,17 @@ nib.save(nib.Nifti1Image(other, np.diag([-1.6, -1.6, 2.0, 1])), os.path.join(TMP
 run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--label",
     os.path.join(TMP, "small.nii.gz"), "--system", "LCA", "--primary", 0, "--secondary", 0,
     "--out", prefix, ok=False, contains="grid")
+# Same dimensions, another spacing (and another origin): refused as gimm-dataset refuses it (one
+# grid check); before, only the dimensions were compared and this rendered.
+label_img = nib.load(os.path.join(ph, "3.label.nii.gz"))
+for name, affine in [("spacing", label_img.affine @ np.diag([1.5, 1, 1, 1])),
+                     ("origin", label_img.affine + np.array([[0, 0, 0, 7.0]] + [[0, 0, 0, 0]] * 3))]:
+    shifted = os.path.join(TMP, f"label_{name}.nii.gz")
+    nib.save(nib.Nifti1Image(np.asarray(label_img.dataobj).astype(np.uint8), affine), shifted)
+    run("gimm-drr", "--volume", os.path.join(ph, "3.img.nii.gz"), "--label", shifted, "--system",
+        "LCA", "--primary", 0, "--secondary", 0, "--out", prefix, ok=False,
+        contains=f"grids disagree: {name}")
+    check(not any(f.startswith("never") for f in os.listdir(TMP)), f"{name}: files left behind")
 
 # Orientation against nibabel: a bright voxel written by nibabel (oblique, qform only, int16
 # with scl_slope) appears in gimm's DRR where gimm's own camera matrix projects the point

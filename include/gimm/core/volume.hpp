@@ -92,6 +92,14 @@ inline std::string grid_difference(const VolumeGeometry& a, const VolumeGeometry
   return out.str();
 }
 
+/// The one grid check of an image and its label (the dataset, gimm-drr, the renderer): throws
+/// unless they share dims, spacing, origin and direction, naming `what` and the first difference.
+inline void check_same_grid(const VolumeGeometry& image, const VolumeGeometry& label,
+                            const std::string& what) {
+  const std::string difference = grid_difference(image, label);
+  GIMM_CHECK(difference.empty(), what << ": image and label grids disagree: " << difference);
+}
+
 template <class T>
 class Volume {
  public:

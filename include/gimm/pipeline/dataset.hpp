@@ -337,9 +337,7 @@ inline PatientVolumes read_patient(const PatientSource& src) {
   GIMM_CHECK_AS(IoError, std::filesystem::exists(src.label),
                 "patient " << src.id << ": label '" << src.label.string() << "' is missing");
   PatientVolumes v{read_volume<float>(src.image), read_volume<std::uint8_t>(src.label)};
-  const std::string difference = grid_difference(v.hu.geometry(), v.label.geometry());
-  GIMM_CHECK(difference.empty(),
-             "patient " << src.id << ": image and label grids disagree: " << difference);
+  check_same_grid(v.hu.geometry(), v.label.geometry(), "patient " + src.id);
   return v;
 }
 

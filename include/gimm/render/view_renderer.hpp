@@ -88,12 +88,8 @@ class ViewRenderer {
                std::shared_ptr<const VesselSurface> surface = nullptr)
       : options_(options), surface_(std::move(surface)) {
     check_options(vessels, name);
-    if (vessels) {
-      // One grid: the injection, the vessel mask and the lumen gain index the CT voxel by voxel.
-      const std::string difference = grid_difference(volume.geometry(), vessels->geometry());
-      GIMM_CHECK(difference.empty(),
-                 name << ": the vessel mask's grid differs from the volume's: " << difference);
-    }
+    // One grid: the injection, the vessel mask and the lumen gain index the CT voxel by voxel.
+    if (vessels) check_same_grid(volume.geometry(), vessels->geometry(), name);
     if (options.recipe.preset == ContrastPreset::none) {
       GIMM_CHECK(!vessels, name << ": with the recipe 'none' the volume already is attenuation: "
                                    "it has no injection to add (give no vessel mask)");
