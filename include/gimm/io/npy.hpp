@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
 #include "gimm/core/image.hpp"
 #include "gimm/io/files.hpp"
+#include "gimm/io/header_text.hpp"
 
 namespace gimm {
 
@@ -66,33 +68,18 @@ void write_npy(const std::filesystem::path& path, const Image<T>& image) {
 
 namespace detail {
 /// The extents of an NPY shape tuple's inside ("3, 4" or "5," or ""): non-negative decimal
-/// integers, each in range; anything else is an error naming the file.
-inline std::vector<std::uint64_t> npy_shape_extents(const std::string& inside,
+/// integers (parse_number checks the range); anything else is an error naming the file.
+inline std::vector<std::uint64_t> npy_shape_extents(std::string_view inside,
                                                     const std::string& what) {
   std::vector<std::uint64_t> out;
-  std::size_t k = 0;
-  const auto skip_spaces = [&] {
-    while (k < inside.size() && inside[k] == ' ') ++k;
-  };
-  skip_spaces();
-  while (k < inside.size()) {
-    std::uint64_t v = 0;
-    std::size_t digits = 0;
-    for (; k < inside.size() && inside[k] >= '0' && inside[k] <= '9'; ++k, ++digits) {
-      GIMM_CHECK_AS(FormatError, v <= (std::numeric_limits<std::uint64_t>::max() - 9) / 10,
-                    "'" << what << "': shape extent in (" << inside << ") is too large");
-      v = v * 10 + static_cast<std::uint64_t>(inside[k] - '0');
-    }
-    GIMM_CHECK_AS(FormatError, digits > 0,
-                  "'" << what << "': shape (" << inside << ") is not a tuple of integers");
-    out.push_back(v);
-    skip_spaces();
-    if (k < inside.size()) {
-      GIMM_CHECK_AS(FormatError, inside[k] == ',',
-                    "'" << what << "': shape (" << inside << ") is not a tuple of integers");
-      ++k;
-      skip_spaces();
-    }
+  for (std::string_view rest = trim(inside); !rest.empty();) {
+    const std::size_t comma = rest.find(',');
+    const std::string_view token = trim(rest.substr(0, comma));
+    GIMM_CHECK_AS(
+        FormatError, !token.empty() && token.find_first_not_of("0123456789") == std::string::npos,
+        "'" << what << "': shape (" << std::string(inside) << ") is not a tuple of integers");
+    out.push_back(parse_number<std::uint64_t>(token, what, "shape"));
+    rest = comma == std::string_view::npos ? std::string_view() : trim(rest.substr(comma + 1));
   }
   return out;
 }
@@ -134,12 +121,13 @@ Image<T> read_npy_image(const std::filesystem::path& path) {
                     << " per side");
   // The data size is checked against the file before the image is allocated.
   const std::uint64_t data_bytes = bytes.size() - 10 - header_size;
-  GIMM_CHECK_AS(FormatError, cols == 0 || rows <= data_bytes / sizeof(T) / cols,
-                "'" << what << "': data size " << data_bytes << " bytes does not match shape ("
-                    << rows << ", " << cols << ")");
-  GIMM_CHECK_AS(FormatError, rows * cols * sizeof(T) == data_bytes,
-                "'" << what << "': data size " << data_bytes << " bytes does not match shape ("
-                    << rows << ", " << cols << ")");
+  // Compared by division, so a huge shape cannot overflow the product.
+  GIMM_CHECK_AS(
+      FormatError,
+      cols == 0 ? data_bytes == 0
+                : data_bytes % (sizeof(T) * cols) == 0 && data_bytes / (sizeof(T) * cols) == rows,
+      "'" << what << "': data size " << data_bytes << " bytes does not match shape (" << rows
+          << ", " << cols << ")");
   Image<T> image(static_cast<int>(rows), static_cast<int>(cols));
   const std::size_t payload = image.size() * sizeof(T);
   std::memcpy(image.data(), bytes.data() + 10 + header_size, payload);
