@@ -97,6 +97,11 @@ class ViewRenderer {
       attenuation_ = padded_attenuation(volume, options.pad_mm, options.projector);
     } else {
       const bool mesh = options.vessels == VesselMode::mesh;
+      // The angiography recipe's bone/contrast classes, found once for the attenuation and the
+      // lumen gain (a second classification costs about a second on a CCTA).
+      std::optional<DenseTissue> own;
+      if (options.recipe.preset == ContrastPreset::angiography && !dense)
+        dense = &own.emplace(classify_dense_tissue(volume, options.recipe));
       attenuation_ = padded_attenuation(volume, mesh ? nullptr : vessels, options.recipe,
                                         options.pad_mm, options.projector, name, dense);
       if (vessels && mesh) lumen_gain_ = lumen_gain(volume, *vessels, options.recipe, dense);
@@ -192,12 +197,10 @@ class ViewRenderer {
   }
 
   /// The mean attenuation the injection adds inside the lumen, with the dense-tissue classes the
-  /// attenuation used (a lumen voxel's uninjected value is blood, not bone).
+  /// attenuation used (a lumen voxel's uninjected value is blood, not bone); `dense` is given
+  /// whenever the recipe classifies.
   static double lumen_gain(const Volume<float>& hu, const Volume<std::uint8_t>& vessels,
                            const ContrastRecipe& recipe, const DenseTissue* dense) {
-    std::optional<DenseTissue> own;
-    if (recipe.preset == ContrastPreset::angiography && !dense)
-      dense = &own.emplace(classify_dense_tissue(hu, recipe));
     double injected = 0, plain = 0;
     std::size_t count = 0;
     for (std::size_t n = 0; n < vessels.size(); ++n)
