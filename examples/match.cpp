@@ -8,6 +8,11 @@
 //              [--geometry cameras|matches] [--gate ...]
 //   gimm-match --dataset DIR --method epipolar|oracle --out PRED_DIR [--sigma PX] [--seed S]
 //              [--max-points N]
+//   gimm-match --method geometric --camera-a A.json --camera-b B.json --image-a A.png
+//              --image-b B.png [--tree tree.json] [--tree-vtk tree.vtk] [--tolerance PX]
+//   gimm-match --dataset DIR --method geometric [--segment] --out PRED_DIR
+// The geometric matcher (match/geometric.hpp) needs the cameras; it uses the dataset's vessel
+// masks unless --segment, and segments the images itself in the single-pair mode.
 // Without --weights the shipped weights are used (weights/README.md), at the input size they
 // record. Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores.
 // The dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
@@ -22,12 +27,14 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include "cli_common.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/match/baselines.hpp"
+#include "gimm/match/geometric.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/nn/matcher_file.hpp"
@@ -113,6 +120,82 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
   return 0;
 }
 
+/// The matches with their triangulated points: JSON (gimm-tree/1) and VTK polydata, lines
+/// joining consecutive samples of one A branch.
+void write_tree(const std::string& json_path, const std::string& vtk_path,
+                const std::vector<gimm::GeometricMatch>& matches) {
+  if (!json_path.empty()) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& m : matches)
+      points.push_back({{"a", {m.a.x(), m.a.y()}},
+                        {"b", {m.b.x(), m.b.y()}},
+                        {"world_mm", {m.world.x(), m.world.y(), m.world.z()}},
+                        {"confidence", m.confidence},
+                        {"consistent", m.consistent},
+                        {"branch", m.branch}});
+    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"}, {"points", points}});
+  }
+  if (!vtk_path.empty()) {
+    std::ostringstream vtk;
+    vtk << "# vtk DataFile Version 3.0\ngimm geometric matcher: triangulated centerline points, "
+           "mm\nASCII\nDATASET POLYDATA\nPOINTS "
+        << matches.size() << " double\n";
+    for (const auto& m : matches)
+      vtk << m.world.x() << ' ' << m.world.y() << ' ' << m.world.z() << '\n';
+    std::vector<std::size_t> lines;
+    for (std::size_t k = 1; k < matches.size(); ++k)
+      if (matches[k].branch == matches[k - 1].branch &&
+          matches[k].sample == matches[k - 1].sample + 1)
+        lines.push_back(k);
+    vtk << "LINES " << lines.size() << ' ' << 3 * lines.size() << '\n';
+    for (std::size_t k : lines) vtk << "2 " << k - 1 << ' ' << k << '\n';
+    gimm::write_file_atomic(vtk_path, vtk.str());
+  }
+}
+
+int match_geometric_pair(const std::string& image_a, const std::string& image_b,
+                         const std::string& camera_a, const std::string& camera_b,
+                         const std::string& pair, const gimm::GeometricOptions& options,
+                         const std::string& out, const std::string& picture,
+                         const std::string& tree, const std::string& tree_vtk) {
+  GIMM_CHECK(!image_a.empty() && !image_b.empty() && !camera_a.empty() && !camera_b.empty(),
+             "--method geometric on one pair needs --image-a, --image-b, --camera-a and "
+             "--camera-b");
+  const auto start = std::chrono::steady_clock::now();
+  const gimm::Image<float> a = gimm::read_png_unit(image_a);
+  const gimm::Image<float> b = gimm::read_png_unit(image_b);
+  gimm::PairInput input;
+  input.id = pair;
+  input.image_a = &a;
+  input.image_b = &b;
+  input.camera_a = read_camera(camera_a);
+  input.camera_b = read_camera(camera_b);
+  const auto loaded = std::chrono::steady_clock::now();
+  const std::vector<gimm::GeometricMatch> found =
+      gimm::GeometricMatcher(options).match_with_points(input);
+  const auto matched = std::chrono::steady_clock::now();
+  const gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
+  // All outputs or none.
+  std::vector<std::string> written;
+  try {
+    if (!picture.empty()) written.push_back(picture), write_picture(picture, a, b, matches);
+    if (!out.empty()) written.push_back(out), gimm::write_matches(out, matches);
+    if (!tree.empty()) written.push_back(tree);
+    if (!tree_vtk.empty()) written.push_back(tree_vtk);
+    write_tree(tree, tree_vtk, found);
+  } catch (...) {
+    for (const auto& f : written) std::filesystem::remove(f);
+    throw;
+  }
+  std::size_t consistent = 0;
+  for (const auto& m : found) consistent += m.consistent;
+  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  std::cout << "gimm-match: " << found.size() << " matches (geometric, " << consistent
+            << " consistent both ways); load " << ms(loaded - start) << " ms, match "
+            << ms(matched - loaded) << " ms\n";
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -125,6 +208,9 @@ int main(int argc, char** argv) {
   gimm::EpipolarBaselineOptions epi;
   int class_a = 0, class_b = 0, input_size = 0;
   gimm::MatchOptions options;
+  gimm::GeometricOptions geometric;
+  bool segment = false;
+  std::string tree, tree_vtk;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
   app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
   app.add_option("--dataset", dataset, "match every pair of this gimm-dataset (--out: a folder)")
@@ -136,9 +222,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cameras", "matches"}))
       ->capture_default_str();
   app.add_option("--method", method,
-                 "learned (the GIMM network) | epipolar | oracle (training-free, dataset mode; "
-                 "match/matcher.hpp)")
-      ->check(CLI::IsMember({"learned", "epipolar", "oracle"}))
+                 "learned (the GIMM network) | geometric (epipolar DP, needs cameras) | epipolar "
+                 "| oracle (training-free, dataset mode; match/matcher.hpp)")
+      ->check(CLI::IsMember({"learned", "epipolar", "oracle", "geometric"}))
       ->capture_default_str();
   app.add_option("--weights", weights,
                  "learned: matcher weights, safetensors (default: the shipped weights, " +
@@ -149,6 +235,15 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed, "oracle/epipolar: random seed")->capture_default_str();
   app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
       ->capture_default_str();
+  app.add_option("--tolerance", geometric.epipolar_tolerance_px,
+                 "geometric: epipolar tolerance, px (calibration error of real C-arms)")
+      ->capture_default_str();
+  app.add_flag("--segment", segment,
+               "geometric, dataset mode: segment the images instead of using the vessel masks");
+  app.add_option("--tree", tree,
+                 "geometric, single pair: the matches with their triangulated points (JSON)");
+  app.add_option("--tree-vtk", tree_vtk,
+                 "geometric, single pair: the reconstructed centerline points as VTK polydata");
   app.add_option("--class-a", class_a, "view class of A: 1..11, 0 = unknown")
       ->capture_default_str();
   app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
@@ -194,6 +289,14 @@ int main(int argc, char** argv) {
       if (method == "learned") {
         gimm::nn::Matcher network = load_network();
         matcher = std::make_unique<gimm::LearnedMatcher>(std::move(network), options);
+      } else if (method == "geometric") {
+        GIMM_CHECK(weights.empty(), "--weights is for --method learned, not geometric");
+        GIMM_CHECK(geometry == "cameras",
+                   "--method geometric needs the cameras (--geometry "
+                   "cameras), got --geometry "
+                       << geometry);
+        geometric.use_masks = !segment;
+        matcher = std::make_unique<gimm::GeometricMatcher>(geometric);
       } else {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
         GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
@@ -204,6 +307,11 @@ int main(int argc, char** argv) {
       }
       return match_dataset(*matcher, dataset, split, geometry == "cameras", out);
     }
+    if (method == "geometric")
+      return match_geometric_pair(image_a, image_b, camera_a, camera_b, pair, geometric, out,
+                                  picture, tree, tree_vtk);
+    GIMM_CHECK(tree.empty() && tree_vtk.empty(),
+               "--tree and --tree-vtk are for --method geometric");
     GIMM_CHECK(method == "learned", "--method " << method
                                                 << " matches a dataset's pairs (it needs their "
                                                    "masks or labels): give --dataset DIR");

@@ -2,6 +2,7 @@
 /// The core room: errors and checks, constants, Image, Volume, deterministic RNG, stable hash,
 /// parallel-for.
 #include "gimm/core/constants.hpp"
+#include "gimm/core/distance_transform.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/hash.hpp"
 #include "gimm/core/image.hpp"

@@ -1,0 +1,172 @@
+#pragma once
+/// 2D vessel centerlines of an angiogram's vessel mask, as a graph of ordered pixel chains.
+///
+/// - thin_mask: Zhang & Suen (1984) parallel thinning to a one-pixel-wide, 8-connected skeleton.
+/// - centerline_graph: the skeleton's nodes are its end pixels (one neighbour) and its branch
+///   pixels (crossing number >= 3: three or more separate runs of skeleton among the 8
+///   neighbours; a staircase corner has three neighbours but crossing number 2 and is not a
+///   node). Branches are the chains between nodes, traced pixel by pixel (4-neighbours before
+///   diagonal ones), plus closed loops; chains shorter than `min_branch_px` pixels are dropped
+///   (thinning spurs, the fragments inside a junction).
+/// - The radius of a centerline pixel is its distance to the nearest background pixel centre
+///   minus half a pixel (core/distance_transform.hpp), as for the 3D centerlines.
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "gimm/core/distance_transform.hpp"
+#include "gimm/core/error.hpp"
+#include "gimm/core/image.hpp"
+
+namespace gimm {
+
+struct Branch2d {
+  std::vector<Eigen::Vector2d> points;  ///< pixel centres (u, v), ordered along the vessel
+  std::vector<double> radius_px;        ///< one per point
+};
+
+struct CenterlineGraph2d {
+  int rows = 0, cols = 0;
+  std::vector<Branch2d> branches;
+  std::size_t point_count() const {
+    std::size_t n = 0;
+    for (const auto& b : branches) n += b.points.size();
+    return n;
+  }
+};
+
+namespace detail {
+
+// The 8 neighbours in cyclic order N, NE, E, SE, S, SW, W, NW (row offset, col offset).
+constexpr std::array<std::array<int, 2>, 8> kRing = {
+    {{-1, 0}, {-1, 1}, {0, 1}, {1, 1}, {1, 0}, {1, -1}, {0, -1}, {-1, -1}}};
+
+inline bool lit(const Image<std::uint8_t>& m, int r, int c) {
+  return m.contains(r, c) && m(r, c) != 0;
+}
+
+/// Foreground neighbours, and 0 -> 1 transitions around the ring (the crossing number).
+inline std::array<int, 2> ring_counts(const Image<std::uint8_t>& m, int r, int c) {
+  int count = 0, transitions = 0;
+  for (int k = 0; k < 8; ++k) {
+    const bool here = lit(m, r + kRing[k][0], c + kRing[k][1]);
+    const bool next = lit(m, r + kRing[(k + 1) % 8][0], c + kRing[(k + 1) % 8][1]);
+    count += here;
+    transitions += !here && next;
+  }
+  return {count, transitions};
+}
+
+}  // namespace detail
+
+/// One-pixel-wide skeleton of a binary mask (nonzero = foreground), Zhang-Suen.
+template <class T>
+Image<std::uint8_t> thin_mask(const Image<T>& mask) {
+  Image<std::uint8_t> m(mask.rows(), mask.cols(), 0);
+  for (std::size_t i = 0; i < mask.size(); ++i) m.data()[i] = mask.data()[i] != T(0);
+  std::vector<std::array<int, 2>> remove;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int pass = 0; pass < 2; ++pass) {
+      remove.clear();
+      for (int r = 0; r < m.rows(); ++r)
+        for (int c = 0; c < m.cols(); ++c) {
+          if (!m(r, c)) continue;
+          const auto [count, transitions] = detail::ring_counts(m, r, c);
+          if (count < 2 || count > 6 || transitions != 1) continue;
+          const bool n = detail::lit(m, r - 1, c), e = detail::lit(m, r, c + 1),
+                     s = detail::lit(m, r + 1, c), w = detail::lit(m, r, c - 1);
+          const bool ok =
+              pass == 0 ? !(n && e && s) && !(e && s && w) : !(n && e && w) && !(n && s && w);
+          if (ok) remove.push_back({r, c});
+        }
+      for (const auto& p : remove) m(p[0], p[1]) = 0;
+      changed = changed || !remove.empty();
+    }
+  }
+  return m;
+}
+
+/// The centerline graph of a vessel mask (nonzero = vessel).
+template <class T>
+CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px = 5) {
+  GIMM_CHECK(min_branch_px >= 2,
+             "centerline_graph: min_branch_px must be >= 2, got " << min_branch_px);
+  const Image<std::uint8_t> skel = thin_mask(mask);
+  const Image<float> distance = distance_to_background(mask);
+  CenterlineGraph2d g;
+  g.rows = mask.rows();
+  g.cols = mask.cols();
+  const int rows = skel.rows(), cols = skel.cols();
+  Image<std::uint8_t> node(rows, cols, 0), used(rows, cols, 0);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (skel(r, c)) {
+        const auto [count, transitions] = detail::ring_counts(skel, r, c);
+        node(r, c) = count <= 1 || transitions >= 3;
+      }
+  // Walk from (r, c) into the neighbour (r1, c1) until a node or a dead end.
+  const auto trace = [&](int r, int c, int r1, int c1) {
+    std::vector<std::array<int, 2>> chain{{r, c}};
+    int pr = r, pc = c;
+    while (true) {
+      chain.push_back({r1, c1});
+      if (node(r1, c1)) break;
+      used(r1, c1) = 1;
+      int nr = -1, nc = -1;
+      for (int pass = 0; pass < 2 && nr < 0; ++pass)  // 4-neighbours first
+        for (int k = pass; k < 8; k += 2) {
+          const int rr = r1 + detail::kRing[k][0], cc = c1 + detail::kRing[k][1];
+          if (!detail::lit(skel, rr, cc) || (rr == pr && cc == pc)) continue;
+          if (!node(rr, cc) && used(rr, cc)) continue;
+          nr = rr;
+          nc = cc;
+          break;
+        }
+      if (nr < 0) break;
+      pr = r1;
+      pc = c1;
+      r1 = nr;
+      c1 = nc;
+    }
+    return chain;
+  };
+  const auto keep = [&](const std::vector<std::array<int, 2>>& chain) {
+    if (static_cast<int>(chain.size()) < min_branch_px) return;
+    Branch2d b;
+    for (const auto& p : chain) {
+      b.points.emplace_back(p[1], p[0]);
+      b.radius_px.push_back(std::max(0.5, double(distance(p[0], p[1])) - 0.5));
+    }
+    g.branches.push_back(std::move(b));
+  };
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      if (!node(r, c)) continue;
+      for (const auto& k : detail::kRing) {
+        const int rr = r + k[0], cc = c + k[1];
+        if (!detail::lit(skel, rr, cc) || used(rr, cc)) continue;
+        // A node-to-node step is traced once, from the node that comes first in raster order.
+        if (node(rr, cc) && (rr < r || (rr == r && cc < c))) continue;
+        keep(trace(r, c, rr, cc));
+      }
+    }
+  // Closed loops have no node: start anywhere on them.
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      if (!skel(r, c) || node(r, c) || used(r, c)) continue;
+      used(r, c) = 1;
+      for (const auto& k : detail::kRing) {
+        const int rr = r + k[0], cc = c + k[1];
+        if (detail::lit(skel, rr, cc) && !used(rr, cc)) {
+          keep(trace(r, c, rr, cc));
+          break;
+        }
+      }
+    }
+  return g;
+}
+
+}  // namespace gimm

@@ -1,0 +1,236 @@
+// The geometric matcher's parts: the chain DP against brute force, vesselness at the centre and
+// scale of a tube, 2D centerlines, and the matcher on an exact synthetic scene and on degenerate
+// input (no vessels, a camera for another image size, epipolar lines along a vessel).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "gimm/geometry/carm.hpp"
+#include "gimm/match/geometric.hpp"
+
+namespace {
+
+/// Dark horizontal bar of half-width `radius` px (a box profile) on a bright background.
+gimm::Image<float> bar_image(int size, double radius, double row) {
+  gimm::Image<float> im(size, size, 0.9f);
+  for (int r = 0; r < size; ++r)
+    for (int c = 0; c < size; ++c)
+      if (std::abs(r - row) <= radius) im(r, c) = 0.4f;
+  return im;
+}
+
+gimm::Camerad carm_camera(double primary, double secondary, int size) {
+  gimm::CArm g;
+  g.primary_deg = primary;
+  g.secondary_deg = secondary;
+  g.rows = g.cols = size;
+  g.pixel_mm = 256.0 / size;
+  return g.camera();
+}
+
+/// A mask with the projection of a 3D polyline drawn `half` px wide.
+gimm::Image<std::uint8_t> draw_curve(const gimm::Camerad& cam,
+                                     const std::vector<Eigen::Vector3d>& curve, int half) {
+  gimm::Image<std::uint8_t> m(cam.rows(), cam.cols(), 0);
+  for (std::size_t k = 0; k + 1 < curve.size(); ++k)
+    for (int s = 0; s <= 50; ++s) {
+      const Eigen::Vector3d X = curve[k] + (curve[k + 1] - curve[k]) * (s / 50.0);
+      const Eigen::Vector2d p = cam.project(X).uv;
+      for (int dr = -half; dr <= half; ++dr)
+        for (int dc = -half; dc <= half; ++dc) {
+          const int r = int(std::lround(p.y())) + dr, c = int(std::lround(p.x())) + dc;
+          if (m.contains(r, c)) m(r, c) = 1;
+        }
+    }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("Chain DP min-marginals equal brute force", "[match][geometric]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> cost(0, 5);
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::size_t n = 2 + trial % 4;
+    std::vector<std::size_t> states(n);
+    for (auto& s : states) s = 1 + rng() % 3;
+    std::vector<std::vector<double>> u(n);
+    std::vector<std::vector<std::vector<double>>> p(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t s = 0; s < states[i]; ++s) u[i].push_back(cost(rng));
+      if (i > 0) {
+        p[i].assign(states[i - 1], std::vector<double>(states[i]));
+        for (auto& row : p[i])
+          for (double& x : row) x = cost(rng);
+      }
+    }
+    const auto unary = [&](std::size_t i, std::size_t s) { return u[i][s]; };
+    const auto pair = [&](std::size_t i, std::size_t a, std::size_t b) { return p[i][a][b]; };
+    const auto dp = gimm::chain_min_marginals(states, unary, pair);
+    // Brute force: every state sequence.
+    std::vector<std::vector<double>> best(n);
+    for (std::size_t i = 0; i < n; ++i) best[i].assign(states[i], 1e300);
+    std::vector<std::size_t> seq(n, 0);
+    std::function<void(std::size_t, double)> walk = [&](std::size_t i, double total) {
+      if (i == n) {
+        for (std::size_t k = 0; k < n; ++k) best[k][seq[k]] = std::min(best[k][seq[k]], total);
+        return;
+      }
+      for (std::size_t s = 0; s < states[i]; ++s) {
+        seq[i] = s;
+        walk(i + 1, total + u[i][s] + (i > 0 ? p[i][seq[i - 1]][s] : 0.0));
+      }
+    };
+    walk(0, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t s = 0; s < states[i]; ++s) CHECK(dp[i][s] == Approx(best[i][s]));
+  }
+}
+
+TEST_CASE("Vesselness peaks on a tube's centre, at the scale of its radius", "[match][geometric]") {
+  const double radius = 3.0, row = 32;  // rows 29..35: half-width 3.5 px
+  const gimm::Image<float> im = bar_image(64, radius, row);
+  gimm::VesselnessOptions o;
+  o.scales_px = {1.0, 3.5, 5.0};
+  const gimm::Image<float> v = gimm::vesselness(im, o);
+  // Across the bar the response is largest at its centre row.
+  int best_row = 0;
+  for (int r = 0; r < 64; ++r)
+    if (v(r, 32) > v(best_row, 32)) best_row = r;
+  CHECK(best_row == int(row));
+  CHECK(v(int(row), 32) == Approx(1.0f));
+  // Among single scales, the one matched to the radius answers most at the centre.
+  double best_scale = 0, best_value = -1;
+  for (double s : {1.0, 1.75, 2.5, 3.5, 5.0, 7.0}) {
+    // vesselness() normalises to its maximum, so compare the s^2-normalised Hessian directly.
+    const auto g2 = gimm::detail::gaussian_kernel(s, 2), g0 = gimm::detail::gaussian_kernel(s, 0);
+    const gimm::Image<float> hyy = gimm::detail::convolve_separable(im, g0, g2);
+    const double value = s * s * hyy(int(row), 32);
+    if (value > best_value) best_value = value, best_scale = s;
+  }
+  CHECK(best_scale == 3.5);
+  // A bright bar (not a contrast-filled vessel) gives nothing.
+  gimm::Image<float> bright = im;
+  for (float& x : bright.storage()) x = 1.3f - x;
+  const gimm::Image<float> vb = gimm::vesselness(bright, o);
+  CHECK(vb(int(row), 32) == 0.0f);
+}
+
+TEST_CASE("Segmentation: a dark bar found, a flat image empty", "[match][geometric]") {
+  const gimm::Image<std::uint8_t> m = gimm::segment_vessels(bar_image(64, 2.0, 20));
+  int on_bar = 0, off_bar = 0;
+  for (int r = 0; r < 64; ++r)
+    for (int c = 0; c < 64; ++c) (std::abs(r - 20) <= 2 ? on_bar : off_bar) += m(r, c);
+  CHECK(on_bar >= 64 * 3);
+  CHECK(off_bar <= 64 * 2);
+  const gimm::Image<std::uint8_t> flat = gimm::segment_vessels(gimm::Image<float>(32, 32, 0.5f));
+  CHECK(std::count(flat.storage().begin(), flat.storage().end(), 1) == 0);
+  CHECK_THROWS_WITH(gimm::vesselness(gimm::Image<float>()), Catch::Contains("empty"));
+  gimm::Image<float> nan_image(8, 8, 0.5f);
+  nan_image(3, 3) = std::nanf("");
+  CHECK_THROWS_WITH(gimm::vesselness(nan_image), Catch::Contains("non-finite"));
+}
+
+TEST_CASE("Centerline graph: one chain along a bar, radius from the distance",
+          "[match][geometric]") {
+  gimm::Image<std::uint8_t> m(40, 60, 0);
+  for (int r = 18; r <= 22; ++r)
+    for (int c = 5; c <= 54; ++c) m(r, c) = 1;
+  const gimm::CenterlineGraph2d g = gimm::centerline_graph(m);
+  REQUIRE(g.branches.size() == 1);
+  const gimm::Branch2d& b = g.branches[0];
+  CHECK(b.points.size() >= 40);
+  for (std::size_t k = 0; k < b.points.size(); ++k) {
+    CHECK(b.points[k].y() == 20);
+    if (k > 0) CHECK((b.points[k] - b.points[k - 1]).norm() <= std::sqrt(2.0) + 1e-12);
+  }
+  CHECK(b.radius_px[b.points.size() / 2] == Approx(2.5));  // 3 px to the background, minus 0.5
+  // A T: three chains meeting at one node.
+  for (int r = 22; r <= 38; ++r)
+    for (int c = 29; c <= 31; ++c) m(r, c) = 1;
+  CHECK(gimm::centerline_graph(m).branches.size() == 3);
+}
+
+TEST_CASE("Geometric matcher on an exact scene: matches on the true point", "[match][geometric]") {
+  // Two 3D curves, seen from LAO 30 / RAO 30; the matcher must put each b within 1.5 px of the
+  // projection of the 3D point whose A projection is a.
+  const int size = 128;
+  const gimm::Camerad ca = carm_camera(30, 10, size), cb = carm_camera(-30, -5, size);
+  std::vector<Eigen::Vector3d> c1, c2;
+  for (int k = 0; k <= 20; ++k) {
+    const double t = k / 20.0;
+    c1.emplace_back(-40 + 80 * t, 15 * std::sin(3 * t), 10 * t - 20);
+    c2.emplace_back(10 * std::cos(2 * t) - 20, -35 + 70 * t, 25 * t);
+  }
+  gimm::Image<std::uint8_t> ma = draw_curve(ca, c1, 1), mb = draw_curve(cb, c1, 1);
+  const auto ma2 = draw_curve(ca, c2, 1), mb2 = draw_curve(cb, c2, 1);
+  for (std::size_t i = 0; i < ma.size(); ++i) {
+    ma.data()[i] |= ma2.data()[i];
+    mb.data()[i] |= mb2.data()[i];
+  }
+  gimm::GeometricOptions o;
+  const auto iso = gimm::pair_isocentre(ca, cb);
+  CHECK(iso.norm() < 1e-6);
+  const gimm::VesselView va = gimm::vessel_view(nullptr, &ma, ca, iso, o);
+  const gimm::VesselView vb = gimm::vessel_view(nullptr, &mb, cb, iso, o);
+  const auto matches = gimm::geometric_matches(va, vb, o);
+  INFO("matches " << matches.size());
+  REQUIRE(matches.size() >= 20);
+  // The truth for a: the 3D curve point nearest to the triangulated one, projected into B.
+  std::vector<Eigen::Vector3d> dense;
+  for (const auto* curve : {&c1, &c2})
+    for (std::size_t k = 0; k + 1 < curve->size(); ++k)
+      for (int s = 0; s < 100; ++s)
+        dense.push_back((*curve)[k] + ((*curve)[k + 1] - (*curve)[k]) * (s / 100.0));
+  int good = 0;
+  for (const auto& m : matches) {
+    double best = 1e300;
+    Eigen::Vector2d expected = Eigen::Vector2d::Zero();
+    for (const auto& X : dense)
+      if (const double d = (ca.project(X).uv - m.a).norm(); d < best)
+        best = d, expected = cb.project(X).uv;
+    good += (m.b - expected).norm() <= 2.0;
+    CHECK(gimm::point_line_distance<double>(
+              gimm::fundamental_from_cameras(ca, cb) * m.a.homogeneous(), m.b) <=
+          o.epipolar_tolerance_px);
+  }
+  INFO("good " << good);
+  CHECK(good >= 0.9 * double(matches.size()));
+}
+
+TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {
+  const int size = 64;
+  const gimm::Camerad ca = carm_camera(30, 0, size), cb = carm_camera(-30, 0, size);
+  gimm::GeometricOptions o;
+  const Eigen::Vector3d iso = gimm::pair_isocentre(ca, cb);
+  // No vessels: no matches, no error.
+  const gimm::Image<std::uint8_t> empty(size, size, 0);
+  const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
+  const auto vb = gimm::vessel_view(nullptr, &empty, cb, iso, o);
+  CHECK(gimm::geometric_matches(va, vb, o).empty());
+  const gimm::Image<float> flat(size, size, 0.5f);
+  CHECK(gimm::vessel_view(&flat, nullptr, ca, iso, o).graph.branches.empty());
+  // A camera made for another image size.
+  const gimm::Image<std::uint8_t> small(32, 32, 0);
+  CHECK_THROWS_WITH(gimm::vessel_view(nullptr, &small, ca, iso, o),
+                    Catch::Contains("64 x 64") && Catch::Contains("32 x 32"));
+  // Parallel principal axes: no isocentre.
+  CHECK_THROWS_WITH(gimm::pair_isocentre(ca, ca), Catch::Contains("parallel"));
+  // A vessel along the epipolar lines (its own line crosses it everywhere): the matches it gives
+  // are ambiguous, so none is reported at the default confidence.
+  const Eigen::Matrix3d F = gimm::fundamental_from_cameras(ca, cb);
+  const Eigen::Vector3d l = F * Eigen::Vector2d(32, 32).homogeneous();  // a line in B
+  gimm::Image<std::uint8_t> along(size, size, 0);
+  for (int c = 2; c < size - 2; ++c) {
+    const double r = -(l.x() * c + l.z()) / l.y();
+    if (along.contains(int(std::lround(r)), c)) along(int(std::lround(r)), c) = 1;
+  }
+  gimm::Image<std::uint8_t> across(size, size, 0);
+  for (int r = 10; r < 54; ++r) across(r, 32) = 1;
+  const auto v_across = gimm::vessel_view(nullptr, &across, ca, iso, o);
+  const auto v_along = gimm::vessel_view(nullptr, &along, cb, iso, o);
+  REQUIRE(!v_along.graph.branches.empty());
+  const auto found = gimm::geometric_matches(v_across, v_along, o);
+  CHECK(found.size() <= 3);
+}
