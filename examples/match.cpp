@@ -11,6 +11,8 @@
 //   gimm-match --method geometric --camera-a A.json --camera-b B.json --image-a A.png
 //              --image-b B.png [--tree tree.json] [--tree-vtk tree.vtk] [--tolerance PX]
 //   gimm-match --dataset DIR --method geometric [--segment] --out PRED_DIR
+// Dataset mode, any method using cameras: --camera-error-deg D --camera-error-mm M give the
+// matcher cameras off by D degrees and M mm (geometry/camera_error.hpp), for stability sweeps.
 // The geometric matcher (match/geometric.hpp) needs the cameras; it uses the dataset's vessel
 // masks unless --segment, and segments the images itself in the single-pair mode.
 // Without --weights the shipped weights are used (weights/README.md), at the input size they
@@ -30,6 +32,7 @@
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "gimm/geometry/camera_error.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
@@ -80,7 +83,8 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
 
 /// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
 int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, const std::string& out) {
+                  const std::string& split, bool use_cameras, const std::string& out,
+                  const gimm::CameraError& camera_error, std::uint64_t seed) {
   gimm::DatasetReader reader(dataset);
   const auto ids = reader.pair_ids(split);
   GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
@@ -105,6 +109,12 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
     if (use_cameras) {
       input.camera_a = reader.camera(patient, truth.view_a);
       input.camera_b = reader.camera(patient, truth.view_b);
+      if (!camera_error.none()) {  // the matcher's cameras are off, the images are not
+        gimm::Rng rng = gimm::baseline_stream(seed, "camera-error", ids[n]);
+        const Eigen::Vector3d pivot = gimm::pair_isocentre(*input.camera_a, *input.camera_b);
+        input.camera_a = gimm::perturbed_camera(*input.camera_a, pivot, camera_error, rng);
+        input.camera_b = gimm::perturbed_camera(*input.camera_b, pivot, camera_error, rng);
+      }
     }
     const gimm::PairMatches matches = matcher.match(input);
     gimm::write_matches(gimm::matches_path(out, ids[n]), matches);
@@ -209,6 +219,7 @@ int main(int argc, char** argv) {
   int class_a = 0, class_b = 0, input_size = 0;
   gimm::MatchOptions options;
   gimm::GeometricOptions geometric;
+  gimm::CameraError camera_error;
   bool segment = false;
   std::string tree, tree_vtk;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
@@ -232,11 +243,19 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
       ->capture_default_str();
-  app.add_option("--seed", seed, "oracle/epipolar: random seed")->capture_default_str();
+  app.add_option("--seed", seed, "oracle/epipolar/camera errors: random seed")
+      ->capture_default_str();
   app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
       ->capture_default_str();
   app.add_option("--tolerance", geometric.epipolar_tolerance_px,
                  "geometric: epipolar tolerance, px (calibration error of real C-arms)")
+      ->capture_default_str();
+  app.add_option("--camera-error-deg", camera_error.deg,
+                 "dataset mode: rotate each view's camera given to the matcher by this many "
+                 "degrees about both axes across the view (random signs, --seed), images exact")
+      ->capture_default_str();
+  app.add_option("--camera-error-mm", camera_error.mm,
+                 "dataset mode: shift each view's camera by this many mm (random direction)")
       ->capture_default_str();
   app.add_flag("--segment", segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
@@ -305,7 +324,10 @@ int main(int argc, char** argv) {
         else
           matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
       }
-      return match_dataset(*matcher, dataset, split, geometry == "cameras", out);
+      GIMM_CHECK(camera_error.none() || geometry == "cameras",
+                 "--camera-error-deg/-mm perturb the cameras: they need --geometry cameras");
+      return match_dataset(*matcher, dataset, split, geometry == "cameras", out, camera_error,
+                           seed);
     }
     if (method == "geometric")
       return match_geometric_pair(image_a, image_b, camera_a, camera_b, pair, geometric, out,

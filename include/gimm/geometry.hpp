@@ -1,6 +1,7 @@
 #pragma once
 /// The geometry room: C-arm cameras, epipolar geometry, F estimation, gating, triangulation.
 #include "gimm/geometry/camera.hpp"
+#include "gimm/geometry/camera_error.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/fundamental.hpp"

@@ -5,6 +5,7 @@ ends with the same weights as an uninterrupted one. Exits 77 (skipped) without P
 
     train_test.py EXAMPLES_DIR TMP_DIR
 """
+import json
 import os
 import shutil
 import socket
@@ -63,11 +64,18 @@ assert os.path.exists(os.path.join(TMP, "ranks", "checkpoint.pt"))
 # Stopped at step 3 and resumed = straight through to step 6.
 finish(train("straight"), "straight run")
 finish(train("resumed", "--stop-at", "3"), "first half")
+# A sitting killed after its checkpoint logged steps the checkpoint does not hold.
+log_path = os.path.join(TMP, "resumed", "log.jsonl")
+with open(log_path, "a") as f:
+    f.write(json.dumps({"step": 4, "loss": 9.0}) + "\n" + json.dumps({"val": {"step": 5}}) + "\n")
 out = finish(subprocess.Popen([sys.executable, TRAIN, "--dataset", data, "--run",
                                os.path.join(TMP, "resumed"), "--resume", "--threads", "1"],
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True),
              "resumed half")
 assert "stopped at step 6" in out, out
+with open(log_path) as f:
+    steps = [json.loads(ln).get("step") for ln in f if "val" not in json.loads(ln)]
+assert steps == [1, 2, 3, 4, 5, 6], f"log steps after resume: {steps}"
 a, _ = load_file(os.path.join(TMP, "straight", "last.safetensors"))
 b, _ = load_file(os.path.join(TMP, "resumed", "last.safetensors"))
 assert a.keys() == b.keys()

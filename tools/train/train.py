@@ -260,6 +260,23 @@ def save_checkpoint(path, state):
     os.replace(tmp, path)
 
 
+def truncate_log(path, step):
+    """Drops the log entries of steps after `step`: a run stopped between checkpoints wrote them,
+    and the resumed run writes those steps again."""
+    if not os.path.isfile(path):
+        return
+    with open(path) as f:
+        lines = f.readlines()
+    keep = [ln for ln in lines if ln.strip() and
+            json.loads(ln).get("step", json.loads(ln).get("val", {}).get("step", 0)) <= step]
+    if len(keep) != len(lines):
+        tmp = path + ".tmp"
+        with open(tmp, "w") as f:
+            f.writelines(keep)
+        os.replace(tmp, path)
+        print(f"train: dropped {len(lines) - len(keep)} log entries after step {step}", flush=True)
+
+
 def main(argv=None):
     args = parse_args(argv)
     rank, world = init_ranks()
@@ -316,7 +333,10 @@ def main(argv=None):
     start = time.time()
     cpu_start = time.process_time()
     last_ckpt = last_val = start
-    log = open(os.path.join(args.run, "log.jsonl"), "a") if rank == 0 else None
+    log_path = os.path.join(args.run, "log.jsonl")
+    if rank == 0 and state is not None:
+        truncate_log(log_path, step)
+    log = open(log_path, "a") if rank == 0 else None
     per_step = args.batch * world
     order = epoch_order(len(train), args.seed, epoch)
     seen_window, t_window = 0, time.time()

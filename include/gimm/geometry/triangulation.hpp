@@ -89,4 +89,25 @@ Scalar reprojection_error(const Camera<Scalar>& camera, const Eigen::Matrix<Scal
   return (p.uv - pixel).norm();
 }
 
+/// Two views in closed form (no SVD): the midpoint of the common perpendicular of two rays,
+/// nullopt when they are parallel. The geometric matcher triangulates every candidate with it.
+inline std::optional<Eigen::Vector3d> two_ray_midpoint(const Ray<double>& r1,
+                                                       const Ray<double>& r2) {
+  const Eigen::Vector3d w0 = r1.origin - r2.origin;
+  const double b = r1.direction.dot(r2.direction), d = r1.direction.dot(w0),
+               e = r2.direction.dot(w0);
+  const double denom = 1 - b * b;
+  if (!(denom > 1e-12)) return std::nullopt;
+  const double s = (b * e - d) / denom, t = (e - b * d) / denom;
+  return 0.5 * ((r1.origin + s * r1.direction) + (r2.origin + t * r2.direction));
+}
+
+/// The principal axes' closest point: the isocentre of a C-arm pair (for the magnification).
+inline Eigen::Vector3d pair_isocentre(const Camerad& a, const Camerad& b) {
+  const auto centre = [](const Camerad& c) { return c.ray(c.K()(0, 2), c.K()(1, 2)); };
+  const auto X = two_ray_midpoint(centre(a), centre(b));
+  GIMM_CHECK(X, "pair_isocentre: the two views look along parallel axes (no isocentre)");
+  return *X;
+}
+
 }  // namespace gimm

@@ -41,6 +41,7 @@
 #include "gimm/core/image.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/epipolar.hpp"
+#include "gimm/geometry/triangulation.hpp"
 #include "gimm/match/centerline_graph.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/vesselness.hpp"
@@ -95,18 +96,6 @@ struct Candidate {
   int chain = -1;
   double unary = 0;
 };
-
-/// Midpoint of the common perpendicular of two viewing rays (nullopt when parallel).
-inline std::optional<Eigen::Vector3d> two_ray_midpoint(const Ray<double>& r1,
-                                                       const Ray<double>& r2) {
-  const Eigen::Vector3d w0 = r1.origin - r2.origin;
-  const double b = r1.direction.dot(r2.direction), d = r1.direction.dot(w0),
-               e = r2.direction.dot(w0);
-  const double denom = 1 - b * b;
-  if (!(denom > 1e-12)) return std::nullopt;
-  const double s = (b * e - d) / denom, t = (e - b * d) / denom;
-  return 0.5 * ((r1.origin + s * r1.direction) + (r2.origin + t * r2.direction));
-}
 
 /// Detector pixels per mm at world point X (focal length over depth; orthographic: K's scale).
 inline double pixels_per_mm(const Camerad& camera, const Eigen::Vector3d& X) {
@@ -192,7 +181,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     const Ray<double> ray_a = from.camera.ray(a.x(), a.y());
     const auto add = [&](const Eigen::Vector2d& b, double rb, double d, int chain) {
       const Ray<double> ray_b = to.camera.ray(b.x(), b.y());
-      const auto X = detail::two_ray_midpoint(ray_a, ray_b);
+      const auto X = two_ray_midpoint(ray_a, ray_b);
       if (!X || (o.heart_radius_mm > 0 && (*X - isocentre).norm() > o.heart_radius_mm)) return;
       detail::Candidate c{b, *X, chain, 0};
       c.unary = o.w_epipolar * (d / tol) * (d / tol) +
@@ -273,14 +262,6 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     }
   }
   return out;
-}
-
-/// The principal axes' closest point: the isocentre of a C-arm pair (for the magnification).
-inline Eigen::Vector3d pair_isocentre(const Camerad& a, const Camerad& b) {
-  const auto centre = [](const Camerad& c) { return c.ray(c.K()(0, 2), c.K()(1, 2)); };
-  const auto X = detail::two_ray_midpoint(centre(a), centre(b));
-  GIMM_CHECK(X, "geometric matcher: the two views look along parallel axes (no isocentre)");
-  return *X;
 }
 
 /// A view's vessels and centerlines: from `mask` when given, else segmented from the image.

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The geometric matcher's speed at 256^2 and 512^2: a 1-patient phantom dataset at each size
+# (same field of view), then gimm_geometric_bench on its first pair.
+#   benchmarks/matcher/geometric.sh BUILD [WORK_DIR]
+set -euo pipefail
+build=$1 work=${2:-$(mktemp -d)}
+for size in 256 512; do
+  ds=$work/geometric-$size
+  [ -f "$ds/manifest.json" ] || "$build/examples/gimm-dataset" --phantom 1 --seed 7 --rows $size \
+    --cols $size --pixel "$(python3 -c "print(256.0 / $size)")" --out "$ds" --quiet
+  echo "== $size x $size"
+  GIMM_GEOMETRIC_DATASET=$ds "$build/benchmarks/gimm_geometric_bench" --benchmark_repetitions=3 \
+    --benchmark_report_aggregates_only=true
+done
