@@ -1,9 +1,9 @@
 #pragma once
 /// The anatomy room: HU -> attenuation and contrast recipes, components and the LCA/RCA split,
-/// centerlines, the isocentre rule, vessel meshes, the procedural phantom.
+/// centerlines, the isocentre rule, vessel meshes, the procedural phantom. Needs gimm::gimm
+/// only; the centerlines' JSON record (anatomy/centerlines_json.hpp) is in the io umbrella.
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/anatomy/centerlines.hpp"
-#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/anatomy/isocenter.hpp"

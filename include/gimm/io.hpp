@@ -1,6 +1,7 @@
 #pragma once
 /// The io room (target gimm::io): JSON records, volumes (NIfTI, NRRD, MetaImage; read_volume
-/// picks by name), PNG and NPY images, gzip, atomic files.
+/// picks by name), PNG and NPY images, gzip, atomic files, and the centerline tree's JSON record.
+#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/gzip.hpp"

@@ -252,6 +252,18 @@ TEST_CASE("NIfTI malformed files give errors naming the file and the problem", "
   auto gz = gimm::gzip_compress(good.data(), good.size());
   gz.resize(gz.size() / 2);
   require_format_error(gz, "truncated.nii.gz", "truncated");
+  // A gzip bomb: a small header's worth of dims followed by 64 MiB of zeros. Inflating stops
+  // just past the size the header implies (found before the fix: the whole stream was inflated,
+  // 3 GB peak for a 1 GiB bomb, then "bytes beyond the voxel data").
+  auto bomb = good;
+  bomb.resize(bomb.size() + (64u << 20), 0);
+  gz = gimm::gzip_compress(bomb.data(), bomb.size());
+  CHECK(gz.size() < (1u << 20));
+  require_format_error(gz, "bomb.nii.gz", "the header implies " + std::to_string(good.size()));
+  // A stream cut inside the header.
+  gz = gimm::gzip_compress(good.data(), good.size());
+  require_format_error(std::vector<unsigned char>(gz.begin(), gz.begin() + 20), "head.nii.gz",
+                       "too short");
   CHECK_THROWS_AS(gimm::read_nifti<float>(tmp_path("does_not_exist.nii")), gimm::IoError);
 }
 

@@ -81,6 +81,31 @@ inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned cha
   return detail::inflate_streams(bytes.data(), bytes.size(), what, max_bytes, 15 + 16, "gzip");
 }
 
+/// The first `n` inflated bytes of gzip data (fewer when it is shorter): reads a header
+/// without inflating the rest. Corrupt data within the prefix is an error.
+inline std::vector<unsigned char> gzip_prefix(const std::vector<unsigned char>& bytes,
+                                              const std::string& what, std::size_t n) {
+  GIMM_CHECK(bytes.size() < (1ull << 32),
+             "'" << what << "': compressed data over 4 GiB is not supported");
+  z_stream z{};
+  GIMM_CHECK_AS(FormatError, inflateInit2(&z, 15 + 16) == Z_OK,
+                "'" << what << "': cannot initialise zlib");
+  std::vector<unsigned char> out(n);
+  z.next_in = const_cast<unsigned char*>(bytes.data());
+  z.avail_in = static_cast<uInt>(bytes.size());
+  z.next_out = out.data();
+  z.avail_out = static_cast<uInt>(n);
+  int status = Z_OK;
+  while (z.avail_out > 0 && status == Z_OK) status = inflate(&z, Z_NO_FLUSH);
+  const std::string message = z.msg ? z.msg : "";
+  const std::size_t produced = n - z.avail_out;
+  inflateEnd(&z);
+  GIMM_CHECK_AS(FormatError, status == Z_OK || status == Z_STREAM_END || status == Z_BUF_ERROR,
+                "'" << what << "': gzip data is corrupt: " << message);
+  out.resize(produced);
+  return out;
+}
+
 /// Inflates zlib data (RFC 1950: deflate with a 2-byte header and an Adler-32 trailer, what
 /// MetaImage's CompressedData holds), or gzip data: the wrapper is told by its first bytes, as
 /// MetaIO's own reader does (inflateInit2 with 15 + 32).

@@ -178,11 +178,18 @@ inline Eigen::Matrix<double, 3, 4> nifti_affine(const HeaderFields& h, const std
   return A;
 }
 
+/// The file size a header implies: its voxel offset plus the voxel data.
+inline std::uint64_t nifti_file_size(const NiftiHeader& h) {
+  return h.vox_offset + static_cast<std::uint64_t>(h.geometry.voxel_count()) *
+                            static_cast<std::uint64_t>(nifti_bytes_per_voxel(h.datatype));
+}
+
 /// Parses and validates a header: `head` holds the file's first `head_size` bytes (at least
 /// the 348 of the header, when the file has them) and `file_size` is the whole (decompressed)
 /// file's size, against which the data size is checked.
 inline NiftiHeader parse_nifti_header(const unsigned char* head, std::size_t head_size,
-                                      std::uint64_t file_size, const std::string& what) {
+                                      std::uint64_t file_size, const std::string& what,
+                                      bool check_size = true) {
   GIMM_CHECK_AS(
       FormatError, head_size >= kNiftiHeaderSize,
       "'" << what << "': " << file_size << " bytes is too short for a NIfTI-1 header (348 bytes)");
@@ -266,8 +273,8 @@ inline NiftiHeader parse_nifti_header(const unsigned char* head, std::size_t hea
     throw FormatError(e.what());
   }
 
-  const std::uint64_t expected =
-      out.vox_offset + static_cast<std::uint64_t>(out.geometry.voxel_count()) * bytes_per_voxel;
+  const std::uint64_t expected = nifti_file_size(out);
+  if (!check_size) return out;
   GIMM_CHECK_AS(FormatError, file_size >= expected,
                 "'" << what << "': truncated: dims " << out.geometry.dims[0] << "x"
                     << out.geometry.dims[1] << "x" << out.geometry.dims[2] << " of "
@@ -285,6 +292,25 @@ inline NiftiHeader parse_nifti_header(const unsigned char* head, std::size_t hea
 inline NiftiHeader parse_nifti_header(const std::vector<unsigned char>& bytes,
                                       const std::string& what) {
   return parse_nifti_header(bytes.data(), bytes.size(), bytes.size(), what);
+}
+
+/// Inflates a .nii.gz no further than the size its header implies: a small file that inflates
+/// to gigabytes (or a header whose dims do not match the data) stops there, with an error
+/// naming both sizes, instead of allocating what the stream would give.
+inline std::vector<unsigned char> inflate_nifti(const std::vector<unsigned char>& gz,
+                                                const std::string& what) {
+  const std::vector<unsigned char> head = gzip_prefix(gz, what, kNiftiHeaderSize);
+  const NiftiHeader h = parse_nifti_header(head.data(), head.size(), head.size(), what, false);
+  const std::uint64_t implied = nifti_file_size(h);
+  try {
+    return gzip_decompress(gz, what, implied + 1);  // + 1: zlib may need room to see the end
+  } catch (const FormatError& e) {
+    if (std::string(e.what()).find("inflates to more than") == std::string::npos) throw;
+    throw FormatError(std::string(e.what()) + ": the header implies " + std::to_string(implied) +
+                      " bytes (dims " + std::to_string(h.geometry.dims[0]) + "x" +
+                      std::to_string(h.geometry.dims[1]) + "x" +
+                      std::to_string(h.geometry.dims[2]) + ")");
+  }
 }
 
 /// Rotation (det +1) to NIfTI quaternion (b, c, d) with a >= 0.
@@ -334,7 +360,7 @@ std::optional<Volume<T>> read_nifti_in_place(const std::filesystem::path& path) 
 /// Reads the header only (the whole file is still read and, if gzipped, inflated).
 inline NiftiHeader read_nifti_header(const std::filesystem::path& path) {
   auto bytes = read_file_bytes(path);
-  if (is_gzip(bytes)) bytes = gzip_decompress(bytes, path.string());
+  if (is_gzip(bytes)) bytes = detail::inflate_nifti(bytes, path.string());
   return detail::parse_nifti_header(bytes, path.string());
 }
 
@@ -345,7 +371,7 @@ Volume<T> read_nifti(const std::filesystem::path& path) {
   const std::string what = path.string();
   if (auto direct = detail::read_nifti_in_place<T>(path)) return std::move(*direct);
   auto bytes = read_file_bytes(path);
-  if (is_gzip(bytes)) bytes = gzip_decompress(bytes, what);
+  if (is_gzip(bytes)) bytes = detail::inflate_nifti(bytes, what);
   const NiftiHeader header = detail::parse_nifti_header(bytes, what);
   Volume<T> volume(header.geometry);
   const unsigned char* src = bytes.data() + header.vox_offset;
