@@ -1,14 +1,13 @@
 #pragma once
-/// Exact Euclidean distance transforms (Felzenszwalb & Huttenlocher, separable): the distance
-/// from each pixel or voxel centre to the nearest background centre, in the grid's units.
-/// Used for vessel radii: 3D centerlines (anatomy/skeleton.hpp) and 2D ones (match/).
+/// The exact Euclidean distance transform (Felzenszwalb & Huttenlocher, separable): the distance
+/// from each voxel centre to the nearest background voxel centre, in mm.
+/// Used for vessel radii of the 3D centerlines (anatomy/skeleton.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <vector>
 
-#include "gimm/core/image.hpp"
 #include "gimm/core/volume.hpp"
 
 namespace gimm {
@@ -76,32 +75,6 @@ Volume<float> distance_to_background(const Volume<T>& mask) {
       }
   }
   Volume<float> out(mask.geometry());
-  for (std::size_t i = 0; i < g.size(); ++i) out.data()[i] = static_cast<float>(std::sqrt(g[i]));
-  return out;
-}
-
-/// Euclidean distance (pixels) from each pixel centre to the nearest pixel centre where `mask`
-/// is zero; 0 on background, +inf everywhere if the mask has no background.
-template <class T>
-Image<float> distance_to_background(const Image<T>& mask) {
-  const int rows = mask.rows(), cols = mask.cols();
-  std::vector<double> g(mask.size());
-  for (std::size_t i = 0; i < g.size(); ++i)
-    g[i] = mask.data()[i] != T(0) ? std::numeric_limits<double>::infinity() : 0.0;
-  std::vector<double> f(static_cast<std::size_t>(std::max(rows, cols))), d(f.size());
-  std::vector<int> v;
-  std::vector<double> z;
-  for (int r = 0; r < rows; ++r) {  // along each row
-    double* row = g.data() + static_cast<std::size_t>(r) * cols;
-    detail::edt_1d(row, d.data(), cols, 1.0, v, z);
-    std::copy(d.begin(), d.begin() + cols, row);
-  }
-  for (int c = 0; c < cols; ++c) {  // then along each column
-    for (int r = 0; r < rows; ++r) f[r] = g[static_cast<std::size_t>(r) * cols + c];
-    detail::edt_1d(f.data(), d.data(), rows, 1.0, v, z);
-    for (int r = 0; r < rows; ++r) g[static_cast<std::size_t>(r) * cols + c] = d[r];
-  }
-  Image<float> out(rows, cols);
   for (std::size_t i = 0; i < g.size(); ++i) out.data()[i] = static_cast<float>(std::sqrt(g[i]));
   return out;
 }

@@ -35,6 +35,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -114,6 +115,39 @@ inline double bilinear(const Image<float>& im, const Eigen::Vector2d& p) {
   return (1 - fv) * ((1 - fu) * im(r0, c0) + fu * im(r0, c1)) +
          fv * ((1 - fu) * im(r1, c0) + fu * im(r1, c1));
 }
+
+/// Matches bucketed by one of their two points (a when keyed_by_a), in square cells of `cell`
+/// pixels: visit() calls back every match within `radius` (<= cell) of a point.
+class PointGrid {
+ public:
+  PointGrid(const std::vector<GeometricMatch>& matches, bool by_a, double cell)
+      : keyed_by_a(by_a), matches_(matches), cell_(std::max(cell, 1e-6)) {
+    for (std::size_t k = 0; k < matches.size(); ++k) cells_[key(at(k))].push_back(k);
+  }
+  template <class F>
+  void visit(const Eigen::Vector2d& p, double radius, F&& f) const {
+    const long cx = cell_of(p.x()), cy = cell_of(p.y());
+    for (long dy = -1; dy <= 1; ++dy)
+      for (long dx = -1; dx <= 1; ++dx) {
+        const auto it = cells_.find(pack(cx + dx, cy + dy));
+        if (it == cells_.end()) continue;
+        for (std::size_t k : it->second)
+          if ((at(k) - p).norm() <= radius) f(k);
+      }
+  }
+  const bool keyed_by_a;
+
+ private:
+  const Eigen::Vector2d& at(std::size_t k) const {
+    return keyed_by_a ? matches_[k].a : matches_[k].b;
+  }
+  long cell_of(double x) const { return static_cast<long>(std::floor(x / cell_)); }
+  static std::int64_t pack(long x, long y) { return (std::int64_t(x) << 32) ^ (y & 0xffffffff); }
+  std::int64_t key(const Eigen::Vector2d& p) const { return pack(cell_of(p.x()), cell_of(p.y())); }
+  const std::vector<GeometricMatch>& matches_;
+  double cell_;
+  std::unordered_map<std::int64_t, std::vector<std::size_t>> cells_;
+};
 
 /// Points every `step` pixels of arc length along a chain (the first point included).
 inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double step) {
@@ -302,29 +336,36 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
   const std::vector<GeometricMatch> ba = match_branches_dp(b, a, F.transpose(), iso, o);
   // Another point claiming the same place: an overlap of two vessels in one view, where a
   // point does not tell which vessel it is on.
-  const auto claimed_elsewhere = [&](const std::vector<GeometricMatch>& set,
-                                     const Eigen::Vector2d& here, const Eigen::Vector2d& there,
-                                     bool here_is_a) {
-    for (const GeometricMatch& r : set) {
-      const Eigen::Vector2d& r_here = here_is_a ? r.a : r.b;
-      const Eigen::Vector2d& r_there = here_is_a ? r.b : r.a;
-      if ((r_here - here).norm() <= o.overlap_px && (r_there - there).norm() > o.ambiguity_px)
-        return true;
-    }
-    return false;
+  // Matches indexed by where they sit in each view, for the neighbour queries below.
+  const double reach = std::max(o.overlap_px, o.consistency_px);
+  const detail::PointGrid ab_at_a(ab, true, reach), ab_at_b(ab, false, reach);
+  const detail::PointGrid ba_at_b(ba, true, reach), ba_at_a(ba, false, reach);  // ba: .a is in B
+  // Another match claiming the same place in one view with its partner elsewhere: an overlap of
+  // two vessels there, where a point does not tell which vessel it is on.
+  const auto claimed_elsewhere = [&](const detail::PointGrid& grid,
+                                     const std::vector<GeometricMatch>& set,
+                                     const Eigen::Vector2d& here, const Eigen::Vector2d& there) {
+    bool found = false;
+    grid.visit(here, o.overlap_px, [&](std::size_t k) {
+      const GeometricMatch& r = set[k];
+      const Eigen::Vector2d& r_there = grid.keyed_by_a ? r.b : r.a;
+      found = found || (r_there - there).norm() > o.ambiguity_px;
+    });
+    return found;
   };
   for (GeometricMatch& m : ab) {
     double nearest = o.consistency_px;
     const GeometricMatch* back = nullptr;
-    for (const GeometricMatch& r : ba)
-      if (const double d = (r.a - m.b).norm(); d <= nearest) {
+    ba_at_b.visit(m.b, o.consistency_px, [&](std::size_t k) {
+      if (const double d = (ba[k].a - m.b).norm(); d <= nearest) {
         nearest = d;
-        back = &r;
+        back = &ba[k];
       }
+    });
     m.consistent = back && (back->b - m.a).norm() <= o.consistency_px;
-    // B->A matches hold their A point in .b.
-    m.unique = !claimed_elsewhere(ab, m.a, m.b, true) && !claimed_elsewhere(ba, m.a, m.b, false) &&
-               !claimed_elsewhere(ab, m.b, m.a, false) && !claimed_elsewhere(ba, m.b, m.a, true);
+    m.unique =
+        !claimed_elsewhere(ab_at_a, ab, m.a, m.b) && !claimed_elsewhere(ba_at_a, ba, m.a, m.b) &&
+        !claimed_elsewhere(ab_at_b, ab, m.b, m.a) && !claimed_elsewhere(ba_at_b, ba, m.b, m.a);
   }
   for (GeometricMatch& m : ab) {
     if (!m.consistent) m.confidence *= 0.1;
