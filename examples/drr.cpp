@@ -120,17 +120,13 @@ int main(int argc, char** argv) {
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
     // All or nothing: each file is written atomically, and if a later one fails (a full disk)
     // the earlier ones of this command are removed.
-    const std::vector<std::string> outputs = {out_prefix + ".npy", out_prefix + ".png",
-                                              out_prefix + ".camera.json"};
-    try {
+    const std::vector<std::filesystem::path> outputs = {out_prefix + ".npy", out_prefix + ".png",
+                                                        out_prefix + ".camera.json"};
+    gimm::write_all_or_nothing(outputs, [&] {
       gimm::write_npy(outputs[0], line_integrals);
       gimm::write_png(outputs[1], gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals)));
       gimm::write_json_file(outputs[2], camera_json);
-    } catch (...) {
-      std::error_code ignored;
-      for (const auto& path : outputs) std::filesystem::remove(path, ignored);
-      throw;
-    }
+    });
     const auto t_done = std::chrono::steady_clock::now();
     auto ms = [](auto a, auto b) {
       return std::chrono::duration<double, std::milli>(b - a).count();

@@ -185,18 +185,11 @@ int match_geometric_pair(const std::string& image_a, const std::string& image_b,
       gimm::GeometricMatcher(options).match_with_points(input);
   const auto matched = std::chrono::steady_clock::now();
   const gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
-  // All outputs or none.
-  std::vector<std::string> written;
-  try {
-    if (!picture.empty()) written.push_back(picture), write_picture(picture, a, b, matches);
-    if (!out.empty()) written.push_back(out), gimm::write_matches(out, matches);
-    if (!tree.empty()) written.push_back(tree);
-    if (!tree_vtk.empty()) written.push_back(tree_vtk);
+  gimm::write_all_or_nothing({picture, out, tree, tree_vtk}, [&] {
+    if (!picture.empty()) write_picture(picture, a, b, matches);
+    if (!out.empty()) gimm::write_matches(out, matches);
     write_tree(tree, tree_vtk, found);
-  } catch (...) {
-    for (const auto& f : written) std::filesystem::remove(f);
-    throw;
-  }
+  });
   std::size_t consistent = 0;
   for (const auto& m : found) consistent += m.consistent;
   const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
@@ -347,14 +340,10 @@ int main(int argc, char** argv) {
         matcher, a, b, class_a, class_b, read_camera(camera_a), read_camera(camera_b), options);
     const auto matched = std::chrono::steady_clock::now();
     result.matches.pair = pair;
-    // Both or neither: the picture is written first, and removed if the matches cannot be.
-    if (!picture.empty()) write_picture(picture, a, b, result.matches);
-    try {
+    gimm::write_all_or_nothing({picture, out}, [&] {
+      if (!picture.empty()) write_picture(picture, a, b, result.matches);
       if (!out.empty()) gimm::write_matches(out, result.matches);
-    } catch (...) {
-      if (!picture.empty()) std::filesystem::remove(picture);
-      throw;
-    }
+    });
     const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
     std::cout << "gimm-match: " << result.matches.size() << " matches (network "
               << result.network_matches << ", in padding " << result.dropped_in_padding

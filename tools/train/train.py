@@ -267,8 +267,10 @@ def truncate_log(path, step):
         return
     with open(path) as f:
         lines = f.readlines()
-    keep = [ln for ln in lines if ln.strip() and
-            json.loads(ln).get("step", json.loads(ln).get("val", {}).get("step", 0)) <= step]
+    def entry_step(entry):  # a logged step, or a validation's
+        return entry.get("step", entry.get("val", {}).get("step", 0))
+
+    keep = [ln for ln in lines if ln.strip() and entry_step(json.loads(ln)) <= step]
     if len(keep) != len(lines):
         tmp = path + ".tmp"
         with open(tmp, "w") as f:

@@ -18,6 +18,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -124,6 +125,21 @@ inline void write_file_atomic(const std::filesystem::path& path, const void* dat
 
 inline void write_file_atomic(const std::filesystem::path& path, const std::string& text) {
   write_file_atomic(path, text.data(), text.size());
+}
+
+/// The outputs of one command, all there or none: runs `write`, which writes `outputs` (each
+/// atomically); if it throws (a later file failed, e.g. on a full disk), every one of `outputs`
+/// is removed and the error rethrown. Empty paths (outputs not asked for) are skipped.
+template <class Write>
+void write_all_or_nothing(const std::vector<std::filesystem::path>& outputs, Write&& write) {
+  try {
+    write();
+  } catch (...) {
+    std::error_code ignored;
+    for (const auto& path : outputs)
+      if (!path.empty()) std::filesystem::remove(path, ignored);
+    throw;
+  }
 }
 
 /// Parses a JSON file; errors name the file and the parse position.

@@ -27,7 +27,8 @@ namespace detail {
 /// against decompression bombs and absurd headers).
 inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std::size_t size,
                                                   const std::string& what, std::uint64_t max_bytes,
-                                                  int window_bits, const char* format) {
+                                                  int window_bits, const char* format,
+                                                  const std::string& limit_reason = "") {
   GIMM_CHECK(size < (1ull << 32), "'" << what << "': compressed data over 4 GiB is not supported");
   z_stream z{};
   GIMM_CHECK_AS(FormatError, inflateInit2(&z, window_bits) == Z_OK,
@@ -45,7 +46,7 @@ inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std
         inflateEnd(&z);
         GIMM_CHECK_AS(FormatError, false,
                       "'" << what << "': " << format << " data inflates to more than " << max_bytes
-                          << " bytes");
+                          << " bytes" << limit_reason);
       }
       out.resize(std::min<std::uint64_t>(out.size() * 2, max_bytes));
     }
@@ -74,11 +75,14 @@ inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std
 }  // namespace detail
 
 /// Inflates every gzip member of `bytes`. `what` names the input in errors. Refuses to grow
-/// past `max_bytes` (a guard against decompression bombs and absurd headers).
+/// past `max_bytes` (a guard against decompression bombs and absurd headers); `limit_reason`
+/// ends that error's message (where the limit comes from).
 inline std::vector<unsigned char> gzip_decompress(const std::vector<unsigned char>& bytes,
                                                   const std::string& what,
-                                                  std::uint64_t max_bytes = 16ull << 30) {
-  return detail::inflate_streams(bytes.data(), bytes.size(), what, max_bytes, 15 + 16, "gzip");
+                                                  std::uint64_t max_bytes = 16ull << 30,
+                                                  const std::string& limit_reason = "") {
+  return detail::inflate_streams(bytes.data(), bytes.size(), what, max_bytes, 15 + 16, "gzip",
+                                 limit_reason);
 }
 
 /// The first `n` inflated bytes of gzip data (fewer when it is shorter): reads a header

@@ -96,6 +96,7 @@ struct Candidate {
   Eigen::Vector3d world;
   int chain = -1;
   double unary = 0;
+  double px_per_mm = 1;  ///< detector pixels per mm of the source view at `world`
 };
 
 /// Detector pixels per mm at world point X (focal length over depth; orthographic: K's scale).
@@ -217,7 +218,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       const Ray<double> ray_b = to.camera.ray(b.x(), b.y());
       const auto X = two_ray_midpoint(ray_a, ray_b);
       if (!X || (o.heart_radius_mm > 0 && (*X - isocentre).norm() > o.heart_radius_mm)) return;
-      detail::Candidate c{b, *X, chain, 0};
+      detail::Candidate c{b, *X, chain, 0, detail::pixels_per_mm(from.camera, *X)};
       c.unary = o.w_epipolar * (d / tol) * (d / tol) +
                 o.w_radius * std::abs(ra - rb) / std::max({ra, rb, 1.0});
       if (with_intensity) c.unary += o.w_intensity * std::abs(ia - detail::bilinear(*to.image, b));
@@ -265,7 +266,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       if (s_prev == 0 || s == 0) return 0.0;
       const detail::Candidate &p = cand[i - 1][s_prev - 1], &c = cand[i][s - 1];
       const double step_px = (branch.points[idx[i]] - branch.points[idx[i - 1]]).norm();
-      const double expected = step_px / detail::pixels_per_mm(from.camera, c.world);
+      const double expected = step_px / c.px_per_mm;
       const double ratio = std::max((c.world - p.world).norm(), 1e-3) / std::max(expected, 1e-3);
       const double lr = std::log(ratio);
       return o.w_step * lr * lr + (p.chain != c.chain ? o.w_switch : 0.0);
