@@ -1,10 +1,14 @@
 // gimm-carm: prints C-arm cameras as JSON, the 11 routine views, or F between two cameras.
+// From an X-ray angiography DICOM file: gimm-carm --dicom F.dcm [--reference R.dcm] [--explain]
+// (io/dicom.hpp): the camera of its geometry tags; --reference makes R's table position the one
+// of the isocentre (--isocenter, default 0); --explain lists every tag read and every one missing.
 #include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
 #include "gimm/geometry.hpp"
 #include "gimm/io/camera_json.hpp"
+#include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/labels/views.hpp"
 
@@ -19,7 +23,41 @@ int main(int argc, char** argv) {
   app.add_option("--pair", pair, "two camera JSON files: print F (x_b^T F x_a = 0)")
       ->expected(2)
       ->check(CLI::ExistingFile);
+  std::string dicom, reference;
+  bool explain = false;
+  app.add_option("--dicom", dicom, "XA/XRF DICOM file: print the camera of its geometry tags")
+      ->check(CLI::ExistingFile);
+  app.add_option("--reference", reference,
+                 "--dicom: the DICOM view whose table position the isocentre is given at")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--explain", explain,
+               "--dicom: list every tag read (value, use) and every one missing, not the JSON");
   return gimm::cli::run(app, argc, argv, [&] {
+    if (!dicom.empty()) {
+      for (const char* flag : {"--primary", "--secondary", "--sid", "--sod", "--rows", "--cols",
+                               "--model", "--routine", "--pair", "--principal-point"})
+        GIMM_CHECK(app.count(flag) == 0,
+                   "--dicom takes its geometry from the file; " << flag << " cannot be given");
+      gimm::DicomReadOptions read;
+      if (app.count("--pixel")) read.pitch_mm = carm.pixel_mm;
+      gimm::XaFrame frame = gimm::read_xa_dicom(dicom, read);
+      if (!reference.empty())
+        gimm::set_table_reference(frame, gimm::read_xa_dicom(reference, read));
+      flags.finish(frame.carm);  // --isocenter only (the rest was refused above)
+      for (const auto& w : frame.warnings) std::cerr << "gimm-carm: warning: " << w << "\n";
+      if (explain) {
+        std::cout << gimm::explain(frame);
+        return 0;
+      }
+      nlohmann::json j = gimm::to_json(frame.carm);
+      j["dicom"] = {{"file", dicom},
+                    {"frame", frame.frame},
+                    {"frames", frame.frames},
+                    {"table_source", frame.table_source}};
+      std::cout << j.dump(2) << "\n";
+      return 0;
+    }
+    GIMM_CHECK(reference.empty() && !explain, "--reference and --explain go with --dicom");
     if (!pair.empty()) {
       const auto a = gimm::camera_from_json(gimm::read_json_file(pair[0]), pair[0]);
       const auto b = gimm::camera_from_json(gimm::read_json_file(pair[1]), pair[1]);

@@ -53,6 +53,7 @@ struct CArmFlags {
   std::string model = "perspective";
   std::vector<double> isocenter;
   std::vector<double> principal_point;
+  std::vector<double> table;
 
   void add(CLI::App& app, CArm& carm, bool angles_required) {
     auto* primary = app.add_option("--primary", carm.primary_deg, "primary angle, deg (+LAO/-RAO)");
@@ -72,6 +73,10 @@ struct CArmFlags {
         ->capture_default_str();
     app.add_option("--isocenter", isocenter, "isocentre X Y Z, world mm (LPS)")->expected(3);
     app.add_option("--principal-point", principal_point, "principal point U V, px")->expected(2);
+    app.add_option("--table", table,
+                   "table position LATERAL VERTICAL LONGITUDINAL, mm, relative to the table of "
+                   "the isocentre (moves the isocentre to patient +x, +y, +z; head-first supine)")
+        ->expected(3);
   }
 
   /// Applies the parsed string/vector flags to `carm` and validates it.
@@ -81,6 +86,7 @@ struct CArmFlags {
     if (!isocenter.empty()) carm.isocenter = {isocenter[0], isocenter[1], isocenter[2]};
     if (!principal_point.empty())
       carm.principal_point = Eigen::Vector2d(principal_point[0], principal_point[1]);
+    if (!table.empty()) carm.table_mm = {table[0], table[1], table[2]};
     carm.validate();
   }
 };

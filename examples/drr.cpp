@@ -3,7 +3,8 @@
 //            [--recipe reference|angiography|none] --primary DEG --secondary DEG
 //            [camera flags of gimm-carm] [--projector siddon|trilinear] [--step MM] --out PREFIX
 // Writes PREFIX.png (16-bit Beer-Lambert intensity, min-max normalised per image),
-// PREFIX.npy (float32 line integrals, (rows, cols)) and PREFIX.camera.json.
+// PREFIX.npy (float32 line integrals, (rows, cols)) and PREFIX.camera.json; with --dicom also
+// PREFIX.dcm, the PNG's image as an XA file with the C-arm's geometry tags (io/dicom.hpp).
 // --recipe none reads the volume as attenuation (mm^-1) instead of HU.
 // Default isocentre (anatomy/isocenter.hpp, as the dataset's views): the centroid of the injected
 // system's lumen voxels when --label is given, else the centre of the volume's grid.
@@ -19,6 +20,7 @@
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/isocenter.hpp"
 #include "gimm/io/camera_json.hpp"
+#include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/npy.hpp"
 #include "gimm/io/png.hpp"
@@ -61,6 +63,9 @@ int main(int argc, char** argv) {
   app.add_option("--out", out_prefix, "output prefix: PREFIX.png, PREFIX.npy, PREFIX.camera.json")
       ->required();
   app.add_flag("--quiet", quiet, "print nothing on success");
+  bool dicom = false;
+  app.add_flag("--dicom", dicom,
+               "also write PREFIX.dcm: the image as X-ray angiography DICOM with its geometry");
   return gimm::cli::run(app, argc, argv, [&] {
     const auto t0 = std::chrono::steady_clock::now();
     GIMM_CHECK(label_path.empty() == system_name.empty(),
@@ -120,12 +125,21 @@ int main(int argc, char** argv) {
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
     // All or nothing: each file is written atomically, and if a later one fails (a full disk)
     // the earlier ones of this command are removed.
-    const std::vector<std::filesystem::path> outputs = {out_prefix + ".npy", out_prefix + ".png",
-                                                        out_prefix + ".camera.json"};
+    std::vector<std::filesystem::path> outputs = {out_prefix + ".npy", out_prefix + ".png",
+                                                  out_prefix + ".camera.json"};
+    if (dicom) outputs.push_back(out_prefix + ".dcm");
     gimm::write_all_or_nothing(outputs, [&] {
       gimm::write_npy(outputs[0], line_integrals);
-      gimm::write_png(outputs[1], gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals)));
+      const gimm::Image<std::uint16_t> png =
+          gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals));
+      gimm::write_png(outputs[1], png);
       gimm::write_json_file(outputs[2], camera_json);
+      if (dicom) {
+        gimm::Image<float> unit(png.rows(), png.cols());
+        for (int r = 0; r < png.rows(); ++r)
+          for (int c = 0; c < png.cols(); ++c) unit(r, c) = png(r, c) / 65535.0f;
+        gimm::write_xa_dicom(outputs[3].string(), unit, carm);
+      }
     });
     const auto t_done = std::chrono::steady_clock::now();
     auto ms = [](auto a, auto b) {

@@ -11,6 +11,13 @@
 //   gimm-match --method geometric --camera-a A.json --camera-b B.json --image-a A.png
 //              --image-b B.png [--tree tree.json] [--tree-vtk tree.vtk] [--tolerance PX]
 //   gimm-match --dataset DIR --method geometric [--segment] --out PRED_DIR
+//   gimm-match --dicom-a A.dcm --dicom-b B.dcm [--frame-a N --frame-b M] [--method geometric]
+//              [--out m.json] [--picture p.png] [--tree t.json] [--tree-vtk t.vtk]
+// Single pair, either method: --tree/--tree-vtk write the matches triangulated with both cameras
+// (match/reconstruct.hpp; the learned matcher's dropped past --max-reprojection).
+// DICOM (io/dicom.hpp, docs/dicom.md): images and cameras from the files' tags, B's table
+// relative to A's; view classes from the angles unless --class-a/b; real C-arm geometry is off
+// by a few px, so the gate (--delta) and the geometric tolerance default to 5 px there.
 // Dataset mode, any method using cameras: --camera-error-deg D --camera-error-mm M give the
 // matcher cameras off by D degrees and M mm (geometry/camera_error.hpp), for stability sweeps.
 // The geometric matcher (match/geometric.hpp) needs the cameras; it uses the dataset's vessel
@@ -20,7 +27,7 @@
 // The dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
 // from the views unless --geometry matches, which estimates F from the matches as the
 // reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line.
-// Images: 8- or 16-bit PNG, grey or colour (converted to grey), the same size; see
+// Images: 8- or 16-bit PNG, grey or colour (converted to grey), of any sizes; see
 // include/gimm/match/learned.hpp for padding, resizing and where F comes from.
 #include <algorithm>
 #include <chrono>
@@ -34,12 +41,15 @@
 #include "cli_common.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/io/camera_json.hpp"
+#include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/labels/views.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/reconstruct.hpp"
 #include "gimm/nn/matcher_file.hpp"
 
 namespace {
@@ -54,16 +64,43 @@ void draw_line(gimm::Image<gimm::Rgb8>& canvas, Eigen::Vector2d a, Eigen::Vector
   }
 }
 
-/// A and B side by side, each match a line from A to B, green (confident) to red.
+/// The line l (l1 u + l2 v + l3 = 0) across an image of `cols` x `rows`, shifted by `offset`.
+void draw_epipolar_line(gimm::Image<gimm::Rgb8>& canvas, const Eigen::Vector3d& l, int rows,
+                        int cols, double offset, gimm::Rgb8 colour) {
+  std::vector<Eigen::Vector2d> ends;  // where the line meets the image's border
+  if (std::abs(l.y()) > 1e-12)
+    for (double u : {-0.5, cols - 0.5}) {
+      const double v = -(l.x() * u + l.z()) / l.y();
+      if (v >= -0.5 && v <= rows - 0.5) ends.emplace_back(u, v);
+    }
+  if (std::abs(l.x()) > 1e-12)
+    for (double v : {-0.5, rows - 0.5}) {
+      const double u = -(l.y() * v + l.z()) / l.x();
+      if (u >= -0.5 && u <= cols - 0.5) ends.emplace_back(u, v);
+    }
+  if (ends.size() >= 2)
+    draw_line(canvas, ends[0] + Eigen::Vector2d(offset, 0), ends[1] + Eigen::Vector2d(offset, 0),
+              colour);
+}
+
+/// A and B side by side, each match a line from A to B, green (confident) to red; with an F,
+/// the epipolar lines in B of the five most confident matches, in blue.
 void write_picture(const std::string& path, const gimm::Image<float>& a,
                    const gimm::Image<float>& b, const gimm::PairMatches& matches) {
-  gimm::Image<gimm::Rgb8> canvas(a.rows(), a.cols() + b.cols());
-  for (int r = 0; r < a.rows(); ++r)
+  gimm::Image<gimm::Rgb8> canvas(std::max(a.rows(), b.rows()), a.cols() + b.cols());
+  for (int r = 0; r < canvas.rows(); ++r)
     for (int c = 0; c < canvas.cols(); ++c) {
-      const float v = c < a.cols() ? a(r, c) : b(r, c - a.cols());
+      const bool in_a = c < a.cols();
+      const gimm::Image<float>& img = in_a ? a : b;
+      const int col = in_a ? c : c - a.cols();
+      const float v = r < img.rows() ? img(r, col) : 0.0f;
       const auto g = static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
       canvas(r, c) = {g, g, g};
     }
+  if (matches.F)
+    for (std::size_t k : gimm::rank_by_confidence(matches.confidence, 5))
+      draw_epipolar_line(canvas, *matches.F * matches.points_a[k].homogeneous(), b.rows(), b.cols(),
+                         double(a.cols()), {60, 120, 255});
   double top = 0;
   for (double c : matches.confidence) top = std::max(top, c);
   for (std::size_t k = 0; k < matches.size(); ++k) {
@@ -146,45 +183,72 @@ void write_tree(const std::string& json_path, const std::string& vtk_path,
     gimm::write_json_file(json_path, {{"format", "gimm-tree/1"}, {"points", points}});
   }
   if (!vtk_path.empty()) {
-    std::ostringstream vtk;
-    vtk << "# vtk DataFile Version 3.0\ngimm geometric matcher: triangulated centerline points, "
-           "mm\nASCII\nDATASET POLYDATA\nPOINTS "
-        << matches.size() << " double\n";
-    for (const auto& m : matches)
-      vtk << m.world.x() << ' ' << m.world.y() << ' ' << m.world.z() << '\n';
-    std::vector<std::size_t> lines;
-    for (std::size_t k = 1; k < matches.size(); ++k)
-      if (matches[k].branch == matches[k - 1].branch &&
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::pair<std::size_t, std::size_t>> lines;
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+      points.push_back(matches[k].world);
+      if (k > 0 && matches[k].branch == matches[k - 1].branch &&
           matches[k].sample == matches[k - 1].sample + 1)
-        lines.push_back(k);
-    vtk << "LINES " << lines.size() << ' ' << 3 * lines.size() << '\n';
-    for (std::size_t k : lines) vtk << "2 " << k - 1 << ' ' << k << '\n';
-    gimm::write_file_atomic(vtk_path, vtk.str());
+        lines.emplace_back(k - 1, k);
+    }
+    gimm::write_file_atomic(
+        vtk_path, gimm::vtk_polydata("gimm geometric matcher: triangulated centerline points, mm",
+                                     points, lines));
   }
 }
 
-int match_geometric_pair(const std::string& image_a, const std::string& image_b,
-                         const std::string& camera_a, const std::string& camera_b,
-                         const std::string& pair, const gimm::GeometricOptions& options,
-                         const std::string& out, const std::string& picture,
-                         const std::string& tree, const std::string& tree_vtk) {
-  GIMM_CHECK(!image_a.empty() && !image_b.empty() && !camera_a.empty() && !camera_b.empty(),
-             "--method geometric on one pair needs --image-a, --image-b, --camera-a and "
-             "--camera-b");
-  const auto start = std::chrono::steady_clock::now();
-  const gimm::Image<float> a = gimm::read_png_unit(image_a);
-  const gimm::Image<float> b = gimm::read_png_unit(image_b);
+/// The learned matcher's matches triangulated: JSON (gimm-tree/1) and VTK points.
+void write_reconstruction(const std::string& json_path, const std::string& vtk_path,
+                          const gimm::Reconstruction& rec) {
+  if (!json_path.empty()) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& p : rec.points)
+      points.push_back({{"a", {p.a.x(), p.a.y()}},
+                        {"b", {p.b.x(), p.b.y()}},
+                        {"world_mm", {p.world.x(), p.world.y(), p.world.z()}},
+                        {"reprojection_px", {p.reprojection_a, p.reprojection_b}},
+                        {"confidence", p.confidence}});
+    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"},
+                                      {"points", points},
+                                      {"dropped_degenerate", rec.dropped_degenerate},
+                                      {"dropped_reprojection", rec.dropped_reprojection}});
+  }
+  if (!vtk_path.empty()) {
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& p : rec.points) points.push_back(p.world);
+    gimm::write_file_atomic(vtk_path,
+                            gimm::vtk_polydata("gimm: triangulated matches, mm", points, {}));
+  }
+}
+
+/// One pair as the single-pair modes take it: from PNG + camera JSON files, or from DICOM.
+struct LoadedPair {
+  gimm::Image<float> a, b;
+  std::optional<gimm::Camerad> camera_a, camera_b;
+};
+
+int match_geometric_pair(const LoadedPair& loaded_pair, const std::string& pair,
+                         const gimm::GeometricOptions& options, const std::string& out,
+                         const std::string& picture, const std::string& tree,
+                         const std::string& tree_vtk, std::chrono::steady_clock::time_point start) {
+  GIMM_CHECK(loaded_pair.camera_a && loaded_pair.camera_b,
+             "--method geometric on one pair needs the cameras: --camera-a and --camera-b (or "
+             "--dicom-a and --dicom-b)");
+  const gimm::Image<float>& a = loaded_pair.a;
+  const gimm::Image<float>& b = loaded_pair.b;
   gimm::PairInput input;
   input.id = pair;
   input.image_a = &a;
   input.image_b = &b;
-  input.camera_a = read_camera(camera_a);
-  input.camera_b = read_camera(camera_b);
+  input.camera_a = loaded_pair.camera_a;
+  input.camera_b = loaded_pair.camera_b;
   const auto loaded = std::chrono::steady_clock::now();
   const std::vector<gimm::GeometricMatch> found =
       gimm::GeometricMatcher(options).match_with_points(input);
   const auto matched = std::chrono::steady_clock::now();
-  const gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
+  gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
+  matches.F = gimm::fundamental_from_cameras(*input.camera_a, *input.camera_b);
+  matches.F_source = "cameras";
   gimm::write_all_or_nothing({picture, out, tree, tree_vtk}, [&] {
     if (!picture.empty()) write_picture(picture, a, b, matches);
     if (!out.empty()) gimm::write_matches(out, matches);
@@ -214,7 +278,9 @@ int main(int argc, char** argv) {
   gimm::GeometricOptions geometric;
   gimm::CameraError camera_error;
   bool segment = false;
-  std::string tree, tree_vtk;
+  std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
+  int frame_a = -1, frame_b = -1;
+  double max_reprojection = 0;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
   app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
   app.add_option("--dataset", dataset, "match every pair of this gimm-dataset (--out: a folder)")
@@ -253,9 +319,24 @@ int main(int argc, char** argv) {
   app.add_flag("--segment", segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
   app.add_option("--tree", tree,
-                 "geometric, single pair: the matches with their triangulated points (JSON)");
+                 "single pair with cameras: the matches with their triangulated points (JSON)");
   app.add_option("--tree-vtk", tree_vtk,
-                 "geometric, single pair: the reconstructed centerline points as VTK polydata");
+                 "single pair with cameras: the triangulated points as VTK polydata");
+  app.add_option("--max-reprojection", max_reprojection,
+                 "learned, --tree: drop points reprojecting further than this, px (default: the "
+                 "hard gate's --delta)");
+  app.add_option("--dicom-a", dicom_a, "view A: XA/XRF DICOM file (image and C-arm geometry)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--dicom-b", dicom_b,
+                 "view B: XA/XRF DICOM file; its table is taken relative "
+                 "to A's")
+      ->check(CLI::ExistingFile);
+  app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)");
+  app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)");
+  app.add_option("--system", system_name,
+                 "LCA|RCA: the injected system, for view classes from DICOM angles (default: the "
+                 "nearest of all 11 classes)")
+      ->check(CLI::IsMember({"LCA", "RCA"}));
   app.add_option("--class-a", class_a, "view class of A: 1..11, 0 = unknown")
       ->capture_default_str();
   app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
@@ -293,9 +374,11 @@ int main(int argc, char** argv) {
     };
     if (!dataset.empty()) {
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
-                     picture.empty() && pair.empty() && class_a == 0 && class_b == 0,
+                     dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&
+                     tree.empty() && tree_vtk.empty() && class_a == 0 && class_b == 0,
                  "--dataset matches a whole dataset (classes and cameras from its files); it "
-                 "takes no --image-a/b, --camera-a/b, --class-a/b, --pair or --picture");
+                 "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
+                 "--picture or --tree/--tree-vtk");
       GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
       std::unique_ptr<gimm::PairMatcher> matcher;
       if (method == "learned") {
@@ -322,27 +405,82 @@ int main(int argc, char** argv) {
       return match_dataset(*matcher, dataset, split, geometry == "cameras", out, camera_error,
                            seed);
     }
+    // One pair: from DICOM files, or from PNG images and camera JSON files.
+    LoadedPair loaded_pair;
+    if (!dicom_a.empty() || !dicom_b.empty()) {
+      GIMM_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
+      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty(),
+                 "--dicom-a/b carry the images and the geometry: no --image-a/b or --camera-a/b");
+      const auto read = [](const std::string& path, int frame) {
+        gimm::DicomReadOptions options;
+        if (frame >= 0) options.frame = frame;
+        gimm::XaFrame f = gimm::read_xa_dicom(path, options);
+        for (const auto& w : f.warnings) std::cerr << "gimm-match: warning: " << w << "\n";
+        return f;
+      };
+      gimm::XaFrame fa = read(dicom_a, frame_a), fb = read(dicom_b, frame_b);
+      gimm::set_table_reference(fb, fa);
+      std::optional<gimm::CoronarySystem> system;
+      if (!system_name.empty()) system = gimm::parse_coronary_system(system_name);
+      for (auto* f : {&fa, &fb}) {
+        const bool is_a = f == &fa;
+        int& cls = is_a ? class_a : class_b;
+        std::cout << "gimm-match: view " << (is_a ? "A" : "B") << ": " << f->path << " frame "
+                  << f->frame << "/" << f->frames << ", " << f->carm.cols << "x" << f->carm.rows
+                  << ", primary " << f->carm.primary_deg << ", secondary " << f->carm.secondary_deg
+                  << " deg, table " << f->table_source;
+        if (app.count(is_a ? "--class-a" : "--class-b") == 0) {
+          const gimm::ViewClassMatch m =
+              gimm::view_class_from_angles(system, f->carm.primary_deg, f->carm.secondary_deg);
+          cls = m.id;
+          std::cout << "; class " << m.id << " (" << gimm::to_string(gimm::view_class(m.id).system)
+                    << " " << gimm::view_class(m.id).name << ", " << m.distance_deg
+                    << " deg from its ranges)";
+        }
+        std::cout << "\n";
+      }
+      loaded_pair = {std::move(fa.image), std::move(fb.image), fa.carm.camera(), fb.carm.camera()};
+      // Real C-arm geometry: true correspondences lie ~2 px (median) and ~4.5 px (90th
+      // percentile) off their epipolar lines; 5 px keeps ~93% of them (docs/dicom.md).
+      if (app.count("--delta") == 0) options.gate.delta_px = 5.0;
+      if (app.count("--tolerance") == 0) geometric.epipolar_tolerance_px = 5.0;
+      std::cout << "gimm-match: real geometry: gate " << options.gate.delta_px
+                << " px, geometric tolerance " << geometric.epipolar_tolerance_px << " px\n";
+    } else {
+      GIMM_CHECK(!image_a.empty() && !image_b.empty(),
+                 "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
+      GIMM_CHECK(frame_a < 0 && frame_b < 0 && system_name.empty(),
+                 "--frame-a/b and --system go with --dicom-a/b");
+      loaded_pair = {gimm::read_png_unit(image_a), gimm::read_png_unit(image_b),
+                     read_camera(camera_a), read_camera(camera_b)};
+    }
     if (method == "geometric")
-      return match_geometric_pair(image_a, image_b, camera_a, camera_b, pair, geometric, out,
-                                  picture, tree, tree_vtk);
-    GIMM_CHECK(tree.empty() && tree_vtk.empty(),
-               "--tree and --tree-vtk are for --method geometric");
+      return match_geometric_pair(loaded_pair, pair, geometric, out, picture, tree, tree_vtk,
+                                  start);
     GIMM_CHECK(method == "learned", "--method " << method
                                                 << " matches a dataset's pairs (it needs their "
                                                    "masks or labels): give --dataset DIR");
-    GIMM_CHECK(!image_a.empty() && !image_b.empty(),
-               "give --image-a and --image-b (or --dataset DIR)");
+    GIMM_CHECK((tree.empty() && tree_vtk.empty()) || loaded_pair.camera_a,
+               "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
     const gimm::nn::Matcher matcher = load_network();
-    const gimm::Image<float> a = gimm::read_png_unit(image_a);
-    const gimm::Image<float> b = gimm::read_png_unit(image_b);
+    const gimm::Image<float>& a = loaded_pair.a;
+    const gimm::Image<float>& b = loaded_pair.b;
     const auto loaded = std::chrono::steady_clock::now();
     gimm::PairMatchResult result = gimm::match_pair(
-        matcher, a, b, class_a, class_b, read_camera(camera_a), read_camera(camera_b), options);
+        matcher, a, b, class_a, class_b, loaded_pair.camera_a, loaded_pair.camera_b, options);
     const auto matched = std::chrono::steady_clock::now();
     result.matches.pair = pair;
-    gimm::write_all_or_nothing({picture, out}, [&] {
+    result.matches.F = result.F;
+    result.matches.F_source = result.F ? result.fundamental_source : "";
+    std::optional<gimm::Reconstruction> rec;
+    if (!tree.empty() || !tree_vtk.empty())
+      rec = gimm::reconstruct_matches(
+          result.matches, *loaded_pair.camera_a, *loaded_pair.camera_b,
+          max_reprojection > 0 ? max_reprojection : options.gate.delta_px);
+    gimm::write_all_or_nothing({picture, out, tree, tree_vtk}, [&] {
       if (!picture.empty()) write_picture(picture, a, b, result.matches);
       if (!out.empty()) gimm::write_matches(out, result.matches);
+      if (rec) write_reconstruction(tree, tree_vtk, *rec);
     });
     const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
     std::cout << "gimm-match: " << result.matches.size() << " matches (network "
@@ -350,6 +488,10 @@ int main(int argc, char** argv) {
               << ", gated out " << result.dropped_by_gate << "; F from "
               << result.fundamental_source << ", gate " << gate << "); load " << ms(loaded - start)
               << " ms, match " << ms(matched - loaded) << " ms\n";
+    if (rec)
+      std::cout << "gimm-match: " << rec->points.size() << " points triangulated ("
+                << rec->dropped_reprojection << " dropped past the reprojection limit, "
+                << rec->dropped_degenerate << " degenerate)\n";
     return 0;
   });
 }

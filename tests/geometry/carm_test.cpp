@@ -252,3 +252,41 @@ TEST_CASE("CArm::validate names the bad field and value", "[geometry][carm]") {
   CHECK_NOTHROW(pose(180, 89.9).camera());
   CHECK_NOTHROW(pose(-180, -89.9).camera());
 }
+
+TEST_CASE("CArm table: the change from the reference table moves the isocentre", "[geometry]") {
+  // HFS: lateral -> +x, vertical -> +y, longitudinal -> +z (docs/conventions.md). A table move
+  // is the same camera as a moved isocentre; flip a sign and the pairs differ.
+  CArm moved = pose(-30, 20);
+  moved.reference_table_mm = {10, 20, 30};
+  moved.table_mm = {11, 18, 35};  // +1 lateral, -2 vertical, +5 longitudinal
+  CArm shifted = pose(-30, 20);
+  shifted.isocenter = {1, -2, 5};
+  CHECK((moved.view_isocenter() - shifted.isocenter).norm() == 0);
+  CHECK((moved.camera().P() - shifted.camera().P()).cwiseAbs().maxCoeff() < 1e-9);
+  // Feet first: lateral and longitudinal turn round.
+  moved.patient_position = PatientPosition::FFS;
+  CHECK(moved.table_shift() == Eigen::Vector3d(-1, -2, -5));
+  // The same table as the reference: no move, whatever the absolute position.
+  CArm same = pose(10, 0);
+  same.table_mm = same.reference_table_mm = {100, -50, 900};
+  CHECK(same.view_isocenter() == Eigen::Vector3d::Zero());
+  same.table_mm.x() = std::nan("");
+  CHECK_THROWS_WITH(same.camera(), Catch::Contains("table"));
+}
+
+TEST_CASE("CArm non-square pixels: each axis has its own focal length", "[geometry]") {
+  CArm carm = pose(0, 0);
+  carm.pixel_mm = 0.2;      // across the columns (u)
+  carm.pixel_row_mm = 0.4;  // down the rows (v)
+  const Camerad camera = carm.camera();
+  CHECK(camera.K()(0, 0) == Approx(1000 / 0.2));
+  CHECK(camera.K()(1, 1) == Approx(-1000 / 0.4));
+  // A point 10 mm to the patient's left and 10 mm headwards at the isocentre (AP, magnification
+  // 4/3): 66.7 px right of centre but only 33.3 px up.
+  const Eigen::Vector2d c = carm.principal_point_or_centre();
+  const Eigen::Vector2d uv = camera.project(Eigen::Vector3d(10, 0, 10)).uv;
+  CHECK(uv.x() - c.x() == Approx(10 * 4.0 / 3 / 0.2));
+  CHECK(c.y() - uv.y() == Approx(10 * 4.0 / 3 / 0.4));
+  carm.pixel_row_mm = -1;
+  CHECK_THROWS_WITH(carm.camera(), Catch::Contains("row pixel"));
+}

@@ -83,6 +83,21 @@ TEST_CASE("Predictions files: write, read, defaults and errors", "[metrics]") {
   bad(R"({"pair": "other/RCA_00-01", "points_a": [], "points_b": []})");
   bad(R"({"format": "something/2", "points_a": [], "points_b": []})");
   bad(R"([1, 2])");
+  bad(R"({"points_a": [], "points_b": [], "F": [[1, 2, 3], [4, 5, 6]]})");
+  bad(R"({"points_a": [], "points_b": [], "F": [[1, 2, 3], [4, 5, 6], [7, 8, "x"]]})");
+  bad(R"({"points_a": [], "points_b": [], "F": [[1, 2, 3], [4, 5, 6], [7, 8, 9]], "F_source": 3})");
+
+  // The F the matches were gated with travels with them.
+  m.F = Eigen::Matrix3d::Identity() * 0.5;
+  m.F->coeffRef(0, 2) = -1.25e-3;
+  m.F_source = "cameras";
+  gimm::write_matches(file, m);
+  const auto with_f = gimm::read_matches(file);
+  REQUIRE(with_f.F);
+  CHECK(*with_f.F == *m.F);
+  CHECK(with_f.F_source == "cameras");
+  CHECK_FALSE(back.F);  // written without one: none read
+
   gimm::PairMatches inf;
   inf.add({1, 2}, {3, std::nan("")}, 1);
   CHECK_THROWS_AS(gimm::write_matches(py, inf), gimm::FormatError);

@@ -7,6 +7,7 @@
 #include "gimm/geometry/carm.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/learned.hpp"
+#include "gimm/match/reconstruct.hpp"
 #include "gimm/nn/matcher_file.hpp"
 
 namespace {
@@ -131,4 +132,64 @@ TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[m
   options.gate.mode = gimm::GateMode::none;
   CHECK_THROWS_WITH(gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options),
                     Catch::Contains("needs an F"));
+}
+
+TEST_CASE("Learned matcher: images of different sizes map back per image", "[match]") {
+  // B twice as large, each pixel a 2x2 block: resized to A's size (the exact 2x2 box filter)
+  // it is the same network input, so the matches are the same, B's points scaled by 2 about
+  // pixel corners: u2 = 2 (u + 0.5) - 0.5.
+  const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
+  const auto [a, b] = fixture_images(fixture + "parity_anchor_expected.safetensors");
+  gimm::Image<float> b2(2 * b.rows(), 2 * b.cols());
+  for (int r = 0; r < b2.rows(); ++r)
+    for (int c = 0; c < b2.cols(); ++c) b2(r, c) = b(r / 2, c / 2);
+  const gimm::nn::Matcher network =
+      gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors");
+  gimm::MatchOptions options;
+  options.gate.mode = gimm::GateMode::none;
+  options.input_size = std::max(a.rows(), a.cols());
+  const auto same_size = gimm::match_pair(network, a, b, 3, 7, {}, {}, options).matches;
+  const auto larger = gimm::match_pair(network, a, b2, 3, 7, {}, {}, options).matches;
+  REQUIRE(same_size.size() > 0);
+  REQUIRE(larger.size() == same_size.size());
+  for (std::size_t k = 0; k < larger.size(); ++k) {
+    CHECK((larger.points_a[k] - same_size.points_a[k]).norm() < 1e-9);
+    const Eigen::Vector2d expected =
+        2.0 * (same_size.points_b[k].array() + 0.5).matrix() - Eigen::Vector2d(0.5, 0.5);
+    CHECK((larger.points_b[k] - expected).norm() < 1e-4);
+  }
+  // A camera for the wrong image size is named.
+  gimm::CArm carm;
+  carm.rows = a.rows();
+  carm.cols = a.cols();
+  const gimm::Camerad cam = carm.camera();
+  CHECK_THROWS_WITH(gimm::match_pair(network, a, b2, 3, 7, cam, cam, options),
+                    Catch::Contains("camera B") && Catch::Contains("image B"));
+}
+
+TEST_CASE("Reconstruction: exact matches triangulate to their points; off ones are dropped",
+          "[match]") {
+  gimm::CArm carm;
+  carm.rows = carm.cols = 256;
+  carm.pixel_mm = 1.0;
+  carm.primary_deg = 35;
+  carm.secondary_deg = 20;
+  const gimm::Camerad a = carm.camera();
+  carm.primary_deg = -30;
+  carm.secondary_deg = -15;
+  const gimm::Camerad b = carm.camera();
+  gimm::PairMatches matches;
+  const std::vector<Eigen::Vector3d> points{{0, 0, 0}, {20, -10, 30}, {-35, 15, -5}};
+  for (const auto& X : points) matches.add(a.project(X).uv, b.project(X).uv, 0.9);
+  matches.add(a.project(points[1]).uv, b.project(points[1]).uv + Eigen::Vector2d(0, 12), 0.5);
+  const gimm::Reconstruction rec = gimm::reconstruct_matches(matches, a, b, 3.0);
+  REQUIRE(rec.points.size() == 3);
+  CHECK(rec.dropped_reprojection == 1);
+  for (std::size_t k = 0; k < 3; ++k) {
+    CHECK((rec.points[k].world - points[k]).norm() < 1e-6);
+    CHECK(rec.points[k].reprojection_a < 1e-6);
+    CHECK(rec.points[k].reprojection_b < 1e-6);
+  }
+  CHECK_THROWS_WITH(gimm::reconstruct_matches(matches, a, b, std::nan("")),
+                    Catch::Contains("reprojection limit"));
 }

@@ -19,6 +19,14 @@
 /// ((cols - 1) / 2, (rows - 1) / 2).
 /// The orthographic model images the same isocentre field of view: its pixel size is
 /// pixel_mm * SOD / SID, so both models agree at the isocentre plane.
+///
+/// The table (docs/conventions.md, "Table position"): the C-arm's isocentre is fixed in the
+/// room and the table carries the patient, so moving the table moves the isocentre in patient
+/// coordinates. `table_mm` is this view's table position as the system reports it (lateral,
+/// vertical, longitudinal) and `reference_table_mm` that of the reference view, the one whose
+/// isocentre is `isocenter`. For a head-first supine patient the change maps to patient
+///   +x <- lateral, +y <- vertical, +z <- longitudinal
+/// (verified on a GE system's private table tags); feet-first supine turns x and z round.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
@@ -30,6 +38,13 @@
 
 namespace gimm {
 
+/// How the patient lies on the table (DICOM PatientPosition, 0018,5100), for the table axes.
+enum class PatientPosition { HFS, FFS };
+
+inline const char* to_string(PatientPosition p) {
+  return p == PatientPosition::HFS ? "HFS" : "FFS";
+}
+
 struct CArm {
   double primary_deg = 0.0;    ///< +LAO / -RAO, degrees
   double secondary_deg = 0.0;  ///< +cranial / -caudal, degrees
@@ -37,10 +52,14 @@ struct CArm {
   double sod_mm = 750.0;       ///< source to isocentre
   int rows = 512;
   int cols = 512;
-  double pixel_mm = 0.5;  ///< detector pixel pitch (square pixels)
+  double pixel_mm = 0.5;      ///< detector pixel pitch across columns (horizontal), mm
+  double pixel_row_mm = 0.0;  ///< pitch down the rows when pixels are not square; 0: pixel_mm
   /// Principal point in pixels; the detector centre when unset.
   std::optional<Eigen::Vector2d> principal_point;
-  Eigen::Vector3d isocenter = Eigen::Vector3d::Zero();  ///< world mm
+  Eigen::Vector3d isocenter = Eigen::Vector3d::Zero();  ///< world mm, at the reference table
+  Eigen::Vector3d table_mm = Eigen::Vector3d::Zero();   ///< (lateral, vertical, longitudinal)
+  Eigen::Vector3d reference_table_mm = Eigen::Vector3d::Zero();
+  PatientPosition patient_position = PatientPosition::HFS;
   ProjectionModel model = ProjectionModel::perspective;
 
   /// Throws gimm::Error naming the bad field and value.
@@ -56,7 +75,11 @@ struct CArm {
                "CArm: detector size must be in [1, 16384], got " << rows << " x " << cols);
     GIMM_CHECK(std::isfinite(pixel_mm) && pixel_mm > 0,
                "CArm: pixel size must be > 0 mm, got " << pixel_mm);
+    GIMM_CHECK(std::isfinite(pixel_row_mm) && pixel_row_mm >= 0,
+               "CArm: row pixel size must be > 0 mm (0: square pixels), got " << pixel_row_mm);
     GIMM_CHECK(isocenter.allFinite(), "CArm: isocentre must be finite");
+    GIMM_CHECK(table_mm.allFinite() && reference_table_mm.allFinite(),
+               "CArm: table positions must be finite");
     if (principal_point)
       GIMM_CHECK(principal_point->allFinite(), "CArm: principal point must be finite");
   }
@@ -78,21 +101,33 @@ struct CArm {
     return (M * ap_axes).transpose();
   }
 
+  double row_pixel_mm() const { return pixel_row_mm > 0 ? pixel_row_mm : pixel_mm; }
+
+  /// The isocentre's move in patient mm caused by the table's move from the reference view.
+  Eigen::Vector3d table_shift() const {
+    const Eigen::Vector3d d = table_mm - reference_table_mm;  // lateral, vertical, longitudinal
+    const double turn = patient_position == PatientPosition::HFS ? 1.0 : -1.0;
+    return {turn * d.x(), d.y(), turn * d.z()};
+  }
+  /// This view's isocentre in patient coordinates.
+  Eigen::Vector3d view_isocenter() const { return isocenter + table_shift(); }
+
   /// Unit vector from the isocentre to the source.
   Eigen::Vector3d source_direction() const { return -rotation().row(2).transpose(); }
-  Eigen::Vector3d source_position() const { return isocenter + sod_mm * source_direction(); }
+  Eigen::Vector3d source_position() const { return view_isocenter() + sod_mm * source_direction(); }
 
   /// The camera of this C-arm pose.
   Camerad camera() const {
     validate();
     const Eigen::Matrix3d R = rotation();
     const Eigen::Vector2d c = principal_point_or_centre();
-    const double focal = model == ProjectionModel::perspective
-                             ? sid_mm / pixel_mm              // pixels per unit tan
-                             : sid_mm / (pixel_mm * sod_mm);  // pixels per mm at isocentre
+    // Pixels per unit tan (perspective) or per mm at the isocentre (orthographic), per axis.
+    const auto focal = [&](double pitch) {
+      return model == ProjectionModel::perspective ? sid_mm / pitch : sid_mm / (pitch * sod_mm);
+    };
     Eigen::Matrix3d K;
-    K << focal, 0, c.x(),  //
-        0, -focal, c.y(),  //
+    K << focal(pixel_mm), 0, c.x(),        //
+        0, -focal(row_pixel_mm()), c.y(),  //
         0, 0, 1;
     const Eigen::Vector3d t = -R * source_position();
     return Camerad(model, K, R, t, rows, cols);

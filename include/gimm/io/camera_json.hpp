@@ -10,7 +10,9 @@
 ///   "center": [..3],                 // source (perspective) / virtual source point (ortho)
 ///   "principal_axis": [..3],         // unit vector source -> detector
 ///   // C-arm inputs, present when the camera came from a CArm:
-///   "primary_deg", "secondary_deg", "sid_mm", "sod_mm", "pixel_mm", "isocenter": [..3]
+///   "primary_deg", "secondary_deg", "sid_mm", "sod_mm", "pixel_mm", "isocenter": [..3],
+///   and when used: "pixel_row_mm"; "table_mm", "reference_table_mm" ([lateral, vertical,
+///   longitudinal]), "patient_position", "view_isocenter" (isocenter moved by the table)
 /// }
 /// Reading checks every field and names the bad one; K, R, t define the camera and "P",
 /// when present, must agree with them.
@@ -95,6 +97,14 @@ inline nlohmann::json to_json(const CArm& carm) {
   j["sod_mm"] = carm.sod_mm;
   j["pixel_mm"] = carm.pixel_mm;
   j["isocenter"] = matrix_to_json(carm.isocenter);
+  // The table and non-square pixels only when used, so plain C-arm cameras read as before.
+  if (carm.pixel_row_mm > 0) j["pixel_row_mm"] = carm.pixel_row_mm;
+  if (!carm.table_mm.isZero() || !carm.reference_table_mm.isZero()) {
+    j["table_mm"] = matrix_to_json(carm.table_mm);
+    j["reference_table_mm"] = matrix_to_json(carm.reference_table_mm);
+    j["patient_position"] = to_string(carm.patient_position);
+    j["view_isocenter"] = matrix_to_json(carm.view_isocenter());
+  }
   j["principal_point"] = matrix_to_json(carm.principal_point_or_centre());
   return j;
 }

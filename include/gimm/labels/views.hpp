@@ -5,12 +5,16 @@
 /// Class ids are 1..11 in table order; 0 means unknown (the matcher's 12th embedding row).
 /// Angles in degrees: primary +LAO / -RAO, secondary +cranial / -caudal. When sampling, each
 /// range is widened by kViewJitterDeg on both sides and drawn uniformly.
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/core/error.hpp"
+#include "gimm/geometry/carm.hpp"
 
 namespace gimm {
 
@@ -61,6 +65,52 @@ inline std::vector<ViewClass> views_of(CoronarySystem system) {
   for (const auto& v : routine_views())
     if (v.system == system) out.push_back(v);
   return out;
+}
+
+/// The view class nearest to a C-arm pose, and how far the pose is from it.
+struct ViewClassMatch {
+  int id = kUnknownViewClass;
+  double distance_deg = 0;  ///< 0 inside the class's angle ranges
+};
+
+/// The angle between the viewing directions of two poses, degrees.
+inline double view_angle_between(double primary_a, double secondary_a, double primary_b,
+                                 double secondary_b) {
+  CArm a, b;
+  a.primary_deg = primary_a;
+  a.secondary_deg = secondary_a;
+  b.primary_deg = primary_b;
+  b.secondary_deg = secondary_b;
+  const double c = std::clamp(a.source_direction().dot(b.source_direction()), -1.0, 1.0);
+  return rad_to_deg(std::acos(c));
+}
+
+/// The routine view class nearest to (primary, secondary), among the classes of `system` (all
+/// eleven when it is not given). The distance to a class is the angle between the pose's view
+/// direction and that of the nearest pose within the class's ranges (the angles clamped into
+/// them), so it is 0 inside; ties (overlapping ranges) go to the nearer class centre.
+inline ViewClassMatch view_class_from_angles(std::optional<CoronarySystem> system,
+                                             double primary_deg, double secondary_deg) {
+  GIMM_CHECK(std::isfinite(primary_deg) && std::isfinite(secondary_deg),
+             "view_class_from_angles: angles must be finite, got " << primary_deg << ", "
+                                                                   << secondary_deg);
+  ViewClassMatch best;
+  double best_centre = 0;
+  for (const auto& view : routine_views()) {
+    if (system && view.system != *system) continue;
+    const double p = std::clamp(primary_deg, view.primary.lo, view.primary.hi);
+    const double s = std::clamp(secondary_deg, view.secondary.lo, view.secondary.hi);
+    const bool inside = p == primary_deg && s == secondary_deg;
+    const double distance = inside ? 0.0 : view_angle_between(primary_deg, secondary_deg, p, s);
+    const double centre = view_angle_between(primary_deg, secondary_deg, view.primary.centre(),
+                                             view.secondary.centre());
+    if (best.id == kUnknownViewClass || distance < best.distance_deg - 1e-9 ||
+        (distance < best.distance_deg + 1e-9 && centre < best_centre)) {
+      best = {view.id, distance};
+      best_centre = centre;
+    }
+  }
+  return best;
 }
 
 }  // namespace gimm

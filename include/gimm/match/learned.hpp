@@ -2,10 +2,11 @@
 /// Matching a pair of angiograms: images -> network input -> GIMM matcher -> points back in
 /// image pixels -> epipolar gating -> PairMatches (the gimm-matches/1 predictions format).
 ///
-/// Image sizes. Both images must have the same size. The network needs sides that are
-/// multiples of 8, so by default an image runs at its own size, zero-padded on the right and
-/// bottom to the next multiple of 8; matches with a point outside the image content (in the
-/// padding, or refined past an edge) are dropped.
+/// Image sizes. The network needs sides that are multiples of 8, so by default an image runs at
+/// its own size, zero-padded on the right and bottom to the next multiple of 8; matches with a
+/// point outside the image content (in the padding, or refined past an edge) are dropped. The
+/// two images may differ in size (real angiograms of two runs often do): each is resized on its
+/// own, both are padded to the larger rows and columns, and points map back per image.
 /// With `input_size` N > 0 the image is first resized (bilinear, pixel centres aligned, which
 /// is the exact 2x2 box filter at a factor of 2) so that its longer side is N. Points come back
 /// as u = (u_net + 0.5) W / W_net - 0.5 (pixel centres at integers; docs/evaluation.md).
@@ -73,8 +74,10 @@ inline Image<float> resize_bilinear(const Image<float>& image, int rows, int col
   return out;
 }
 
+/// `pad_rows` x `pad_cols`: the tensor size to pad to (0: the content's own, rounded up to 8).
 inline NetworkInput to_network_input(const Image<float>& image, int input_size,
-                                     const std::string& name) {
+                                     const std::string& name, std::int64_t pad_rows = 0,
+                                     std::int64_t pad_cols = 0) {
   GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
   GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
   NetworkInput in;
@@ -92,7 +95,9 @@ inline NetworkInput to_network_input(const Image<float>& image, int input_size,
                   << " is too small for the matcher (at least 8x8 pixels)");
   in.scale_u = double(image.cols()) / in.content_cols;
   in.scale_v = double(image.rows()) / in.content_rows;
-  const std::int64_t rows = (in.content_rows + 7) / 8 * 8, cols = (in.content_cols + 7) / 8 * 8;
+  const std::int64_t rows = std::max<std::int64_t>(pad_rows, (in.content_rows + 7) / 8 * 8);
+  const std::int64_t cols = std::max<std::int64_t>(pad_cols, (in.content_cols + 7) / 8 * 8);
+  GIMM_CHECK(rows % 8 == 0 && cols % 8 == 0, name << ": padded size must be a multiple of 8");
   in.tensor = nn::Tensor({1, 1, rows, cols});
   for (int r = 0; r < in.content_rows; ++r)
     for (int c = 0; c < in.content_cols; ++c) {
@@ -120,20 +125,25 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
   options.gate.validate();
   GIMM_CHECK(!options.snap_to_epipolar || options.gate.mode != GateMode::none,
              "snapping to the epipolar line needs an F: a gate other than none");
-  GIMM_CHECK(image_a.rows() == image_b.rows() && image_a.cols() == image_b.cols(),
-             "image B is " << image_b.cols() << "x" << image_b.rows() << " but image A is "
-                           << image_a.cols() << "x" << image_a.rows()
-                           << "; the two views must have the same size");
   GIMM_CHECK(camera_a.has_value() == camera_b.has_value(),
              "give both cameras or neither (only camera " << (camera_a ? "A" : "B") << " given)");
-  for (const auto* cam : {&camera_a, &camera_b})
-    if (*cam)
-      GIMM_CHECK((*cam)->rows() == image_a.rows() && (*cam)->cols() == image_a.cols(),
-                 "camera " << (cam == &camera_a ? "A" : "B") << " is for " << (*cam)->cols() << "x"
-                           << (*cam)->rows() << " images, the images are " << image_a.cols() << "x"
-                           << image_a.rows());
-  const NetworkInput a = to_network_input(image_a, options.input_size, "image A");
-  const NetworkInput b = to_network_input(image_b, options.input_size, "image B");
+  for (const char view : {'A', 'B'}) {
+    const auto& cam = view == 'A' ? camera_a : camera_b;
+    const Image<float>& image = view == 'A' ? image_a : image_b;
+    if (cam)
+      GIMM_CHECK(cam->rows() == image.rows() && cam->cols() == image.cols(),
+                 "camera " << view << " is for " << cam->cols() << "x" << cam->rows()
+                           << " images, image " << view << " is " << image.cols() << "x"
+                           << image.rows());
+  }
+  NetworkInput a = to_network_input(image_a, options.input_size, "image A");
+  NetworkInput b = to_network_input(image_b, options.input_size, "image B");
+  if (a.tensor.shape() != b.tensor.shape()) {  // images of different sizes: one tensor size
+    const std::int64_t rows = std::max(a.tensor.dim(2), b.tensor.dim(2));
+    const std::int64_t cols = std::max(a.tensor.dim(3), b.tensor.dim(3));
+    a = to_network_input(image_a, options.input_size, "image A", rows, cols);
+    b = to_network_input(image_b, options.input_size, "image B", rows, cols);
+  }
   const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, class_a, class_b);
 
   PairMatchResult result;

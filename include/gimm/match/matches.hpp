@@ -8,7 +8,9 @@
 ///    "pair": "phantom-0000/LCA_00-01",                (<patient>/<pair stem>)
 ///    "points_a": [[u, v], ...],                       (pixels in view A, u = column, v = row,
 ///    "points_b": [[u, v], ...],                        pixel centres at integers)
-///    "confidence": [c, ...]}                          (optional: all 1 when missing)
+///    "confidence": [c, ...],                          (optional: all 1 when missing)
+///    "F": [[..3] x3], "F_source": "cameras"|"matches"} (optional: the F the matches were gated
+///                                                      with, x_b^T F x_a = 0, and its origin)
 ///
 /// Match i is points_a[i] <-> points_b[i]; a higher confidence ranks first. Coordinates and
 /// confidences must be finite numbers and the three arrays equally long (possibly empty).
@@ -18,6 +20,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +36,8 @@ struct PairMatches {
   std::vector<Eigen::Vector2d> points_a;
   std::vector<Eigen::Vector2d> points_b;
   std::vector<double> confidence;
+  std::optional<Eigen::Matrix3d> F;  ///< the F used for gating, when written with the matches
+  std::string F_source;              ///< "cameras" (exact) or "matches" (estimated)
 
   std::size_t size() const { return points_a.size(); }
 
@@ -74,11 +79,18 @@ inline nlohmann::json to_json(const PairMatches& m) {
   nlohmann::json a = nlohmann::json::array(), b = nlohmann::json::array();
   for (const auto& p : m.points_a) a.push_back({p.x(), p.y()});
   for (const auto& p : m.points_b) b.push_back({p.x(), p.y()});
-  return {{"format", kMatchesFormat},
-          {"pair", m.pair},
-          {"points_a", a},
-          {"points_b", b},
-          {"confidence", m.confidence}};
+  nlohmann::json j = {{"format", kMatchesFormat},
+                      {"pair", m.pair},
+                      {"points_a", a},
+                      {"points_b", b},
+                      {"confidence", m.confidence}};
+  if (m.F) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r) rows.push_back({(*m.F)(r, 0), (*m.F)(r, 1), (*m.F)(r, 2)});
+    j["F"] = rows;
+    j["F_source"] = m.F_source;
+  }
+  return j;
 }
 
 namespace detail {
@@ -122,6 +134,28 @@ inline PairMatches matches_from_json(const nlohmann::json& j, const std::string&
     }
   } else {
     m.confidence.assign(m.points_a.size(), 1.0);
+  }
+  if (j.contains("F")) {
+    const nlohmann::json& f = j.at("F");
+    GIMM_CHECK_AS(FormatError, f.is_array() && f.size() == 3,
+                  where << ": 'F' must be 3 rows of 3 numbers, got " << f.dump());
+    Eigen::Matrix3d F;
+    for (int r = 0; r < 3; ++r) {
+      GIMM_CHECK_AS(FormatError, f[r].is_array() && f[r].size() == 3,
+                    where << ": 'F' row " << r << " must be 3 numbers, got " << f[r].dump());
+      for (int c = 0; c < 3; ++c) {
+        GIMM_CHECK_AS(FormatError, f[r][c].is_number() && std::isfinite(f[r][c].get<double>()),
+                      where << ": 'F' has a non-number " << f[r][c].dump());
+        F(r, c) = f[r][c].get<double>();
+      }
+    }
+    m.F = F;
+    m.F_source = "unknown";
+    if (j.contains("F_source")) {
+      GIMM_CHECK_AS(FormatError, j.at("F_source").is_string(),
+                    where << ": 'F_source' must be a string, got " << j.at("F_source").dump());
+      m.F_source = j.at("F_source").get<std::string>();
+    }
   }
   m.validate(where);
   return m;

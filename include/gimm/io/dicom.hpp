@@ -1,0 +1,568 @@
+#pragma once
+/// X-ray angiography DICOM in and out: one frame of an XA or XRF image, and the C-arm that
+/// took it, read from the file's positioner, distance, detector and table tags (GDCM; CMake
+/// target gimm::dicom, docs/dicom.md).
+///
+/// Reading (read_xa_dicom):
+/// - Modality XA or RF (or an XA / XRF SOP class); single- or multi-frame; every transfer syntax
+///   GDCM decodes (uncompressed, RLE, JPEG lossless, JPEG-LS, JPEG 2000); 8-16 bit, one sample
+///   per pixel. The frame is `frame` (0-based), by default the middle one: frames / 2, the frame
+///   most likely to show the contrast-filled tree in a run that starts before the injection.
+/// - Intensities: MONOCHROME1 is inverted to MONOCHROME2 (vessels dark, as gimm renders them),
+///   then the frame's 0.5th-99.5th percentiles are mapped to [0, 1] (clipped), so a 10-bit
+///   run stored in 16 bits and an 8-bit one look alike to the matchers.
+/// - Orientation: FieldOfViewRotation (0018,7032) and FieldOfViewHorizontalFlip (0018,7034)
+///   describe how the stored pixels were turned from the detector (rotate clockwise, then flip);
+///   both are undone so the image is in the detector's own orientation, the one CArm projects to.
+/// - Geometry: PositionerPrimaryAngle (+LAO), PositionerSecondaryAngle (+cranial),
+///   DistanceSourceToDetector (SID), DistanceSourceToPatient (SOD, to the isocentre): required.
+///   Pixel pitch at the detector: ImagerPixelSpacing (row\column); without it IntensifierSize /
+///   Columns, with a warning; without both, an error (or the caller's pitch_mm). The principal
+///   point is the image centre, unless FieldOfViewOrigin, DetectorActiveDimensions and
+///   DetectorElementSpacing place the detector's centre in the image. Table: GE's private
+///   (0019,1021) vertical, (0019,1022) longitudinal, (0019,1023) lateral when the private creator
+///   (0019,0010) is GE's, else the standard TableTop{Vertical,Longitudinal,Lateral}Position
+///   (300A,0128-012A); their change between two views moves the isocentre (CArm, "table").
+///   PatientPosition HFS or FFS; HFS is assumed, with a warning, only when the tag is absent.
+/// - Every tag looked at is in `tags` with its value or "absent", and what was done with it.
+#include <gdcmDataElement.h>
+#include <gdcmDataSet.h>
+#include <gdcmDict.h>
+#include <gdcmDicts.h>
+#include <gdcmGlobal.h>
+#include <gdcmImage.h>
+#include <gdcmImageReader.h>
+#include <gdcmImageWriter.h>
+#include <gdcmMediaStorage.h>
+#include <gdcmStringFilter.h>
+#include <gdcmTrace.h>
+#include <gdcmTransferSyntax.h>
+#include <gdcmUIDGenerator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "gimm/core/error.hpp"
+#include "gimm/core/image.hpp"
+#include "gimm/geometry/carm.hpp"
+#include "gimm/io/files.hpp"
+
+namespace gimm {
+
+/// One tag the reader looked at: the explain report's line.
+struct DicomTagUse {
+  std::string tag;    ///< "(0018,1510)"
+  std::string name;   ///< "PositionerPrimaryAngle"
+  std::string value;  ///< as stored, or "absent"
+  std::string use;    ///< what gimm did with it
+};
+
+struct DicomReadOptions {
+  std::optional<int> frame;        ///< 0-based; default: the middle frame
+  std::optional<double> pitch_mm;  ///< detector pixel pitch, overriding the file's tags
+};
+
+/// One frame of an X-ray angiogram and its C-arm.
+struct XaFrame {
+  std::string path;
+  Image<float> image;  ///< [0, 1], MONOCHROME2, detector orientation, `carm.rows` x `carm.cols`
+  CArm carm;           ///< table_mm read; reference_table_mm = table_mm until set_reference
+  int frame = 0;
+  int frames = 1;
+  std::string table_source = "none";  ///< "GE private (0019,1021-1023)", "standard (300A,...)"
+  std::vector<DicomTagUse> tags;
+  std::vector<std::string> warnings;
+};
+
+/// Makes `reference`'s table position the one whose isocentre is `frame.carm.isocenter`.
+inline void set_table_reference(XaFrame& frame, const XaFrame& reference) {
+  frame.carm.reference_table_mm = reference.carm.table_mm;
+}
+
+namespace detail {
+
+inline void quiet_gdcm() {
+  // GDCM prints its own diagnostics to stderr; gimm reports errors itself, naming the file.
+  gdcm::Trace::SetWarning(false);
+  gdcm::Trace::SetDebug(false);
+  gdcm::Trace::SetError(false);
+}
+
+inline std::string tag_string(std::uint16_t group, std::uint16_t element) {
+  char text[16];
+  std::snprintf(text, sizeof text, "(%04X,%04X)", group, element);
+  return text;
+}
+
+/// `s` without leading and trailing blanks (DICOM pads values to an even length).
+inline std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t\r\n") - first + 1);
+}
+
+/// The tags of one data set, read as text, each lookup recorded for the explain report.
+class TagReader {
+ public:
+  TagReader(const gdcm::File& file, std::string path) : file_(file), path_(std::move(path)) {
+    filter_.SetFile(file_);
+  }
+
+  /// The tag's text value (trimmed), or nullopt; recorded with `use` (or "absent: ...").
+  std::optional<std::string> text(std::uint16_t group, std::uint16_t element, const char* name,
+                                  const std::string& use, const std::string& when_absent) {
+    const gdcm::Tag tag(group, element);
+    const gdcm::DataSet& ds = file_.GetDataSet();
+    std::optional<std::string> value;
+    if (ds.FindDataElement(tag) && !ds.GetDataElement(tag).IsEmpty()) {
+      std::string s = element_text(ds.GetDataElement(tag));
+      const auto first = s.find_first_not_of(" \t\r\n");
+      if (first != std::string::npos)
+        value = s.substr(first, s.find_last_not_of(" \t\r\n") - first + 1);
+    }
+    uses.push_back(
+        {tag_string(group, element), name, value ? *value : "absent", value ? use : when_absent});
+    return value;
+  }
+
+  /// The tag's numbers (DS/IS multi-values separated by '\'); `count` of them when given.
+  std::optional<std::vector<double>> numbers(std::uint16_t group, std::uint16_t element,
+                                             const char* name, const std::string& use,
+                                             const std::string& when_absent, int count) {
+    const auto value = text(group, element, name, use, when_absent);
+    if (!value) return std::nullopt;
+    std::vector<double> out;
+    std::stringstream in(*value);
+    std::string item;
+    while (std::getline(in, item, '\\')) {
+      char* end = nullptr;
+      const double x = std::strtod(item.c_str(), &end);
+      while (*end == ' ') ++end;
+      GIMM_CHECK(end != item.c_str() && *end == '\0' && std::isfinite(x),
+                 path_ << ": tag " << tag_string(group, element) << " " << name
+                       << " is not a finite number: '" << *value << "'");
+      out.push_back(x);
+    }
+    GIMM_CHECK(count <= 0 || int(out.size()) == count,
+               path_ << ": tag " << tag_string(group, element) << " " << name << " must hold "
+                     << count << " numbers, got '" << *value << "'");
+    return out;
+  }
+
+  /// A number that must be present: an error naming the tag otherwise.
+  double required(std::uint16_t group, std::uint16_t element, const char* name,
+                  const std::string& use) {
+    const auto v = numbers(group, element, name, use, "absent: required", 1);
+    GIMM_CHECK(v, path_ << ": required tag " << tag_string(group, element) << " " << name
+                        << " is missing (" << use << ")");
+    return v->front();
+  }
+
+  std::vector<DicomTagUse> uses;
+
+ private:
+  /// Text of an element. Private tags of an implicit-VR file have no VR (UN): their bytes are
+  /// taken as text when they look like a decimal string, else as a little-endian 4-byte integer
+  /// or 8-byte double.
+  std::string element_text(const gdcm::DataElement& de) const {
+    const gdcm::VR vr = de.GetVR();
+    if (vr != gdcm::VR::UN && vr != gdcm::VR::INVALID) return filter_.ToString(de.GetTag());
+    const gdcm::ByteValue* bytes = de.GetByteValue();
+    if (!bytes) return {};
+    const std::string raw(bytes->GetPointer(), bytes->GetLength());
+    const bool decimal = std::all_of(raw.begin(), raw.end(), [](char c) {
+      return std::isdigit(static_cast<unsigned char>(c)) || std::strchr("+-.eE \\", c) || c == '\0';
+    });
+    if (decimal) return std::string(raw.c_str());
+    if (raw.size() == 4) {
+      std::int32_t v;
+      std::memcpy(&v, raw.data(), 4);
+      return std::to_string(v);
+    }
+    if (raw.size() == 8) {
+      double v;
+      std::memcpy(&v, raw.data(), 8);
+      std::ostringstream os;
+      os.precision(17);
+      os << v;
+      return os.str();
+    }
+    return {};
+  }
+
+  const gdcm::File& file_;
+  std::string path_;
+  gdcm::StringFilter filter_;
+};
+
+/// Undoes FieldOfViewRotation (clockwise, degrees) and then the horizontal flip applied after
+/// it: stored = flip(rotate_cw(detector)), so detector = rotate_ccw(flip(stored)).
+inline Image<float> to_detector_orientation(const Image<float>& stored, int rotation_deg,
+                                            bool flipped) {
+  Image<float> unflipped = stored;
+  if (flipped)
+    for (int r = 0; r < stored.rows(); ++r)
+      for (int c = 0; c < stored.cols(); ++c) unflipped(r, c) = stored(r, stored.cols() - 1 - c);
+  const int quarter_turns = (rotation_deg / 90) % 4;
+  Image<float> out = unflipped;
+  for (int q = 0; q < quarter_turns; ++q) {  // one counter-clockwise quarter turn each
+    Image<float> turned(out.cols(), out.rows());
+    for (int r = 0; r < out.rows(); ++r)
+      for (int c = 0; c < out.cols(); ++c) turned(out.cols() - 1 - c, r) = out(r, c);
+    out = std::move(turned);
+  }
+  return out;
+}
+
+/// The frame's stored values -> [0, 1] by its 0.5th and 99.5th percentiles.
+inline Image<float> percentile_window(const std::vector<double>& values, int rows, int cols) {
+  std::vector<double> sorted = values;
+  const auto at = [&](double q) {
+    const std::size_t k = std::min(sorted.size() - 1, std::size_t(q * double(sorted.size() - 1)));
+    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(k), sorted.end());
+    return sorted[k];
+  };
+  const double lo = at(0.005), hi = at(0.995);
+  const double span = hi > lo ? hi - lo : 1.0;
+  Image<float> out(rows, cols);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      out(r, c) = float(std::clamp((values[std::size_t(r) * cols + c] - lo) / span, 0.0, 1.0));
+  return out;
+}
+
+}  // namespace detail
+
+/// Reads one frame of an XA/XRF DICOM file and its C-arm. Throws gimm::Error naming the file
+/// and the tag or value at fault.
+inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& options = {}) {
+  detail::quiet_gdcm();
+  GIMM_CHECK(std::filesystem::is_regular_file(path), path << ": no such file");
+  gdcm::ImageReader reader;
+  reader.SetFileName(path.c_str());
+  if (!reader.Read()) {
+    // Tell "not DICOM" from "DICOM without a decodable image".
+    gdcm::Reader plain;
+    plain.SetFileName(path.c_str());
+    GIMM_CHECK(plain.Read(), path << ": not a DICOM file (GDCM cannot parse it)");
+    const gdcm::TransferSyntax& ts = plain.GetFile().GetHeader().GetDataSetTransferSyntax();
+    GIMM_FAIL(path << ": DICOM without an image this build can decode (transfer syntax "
+                   << gdcm::TransferSyntax::GetTSString(ts) << ")");
+  }
+  const gdcm::File& file = reader.GetFile();
+  const gdcm::Image& image = reader.GetImage();
+  detail::TagReader tags(file, path);
+  XaFrame out;
+  out.path = path;
+
+  // Modality: XA or RF.
+  const auto modality = tags.text(0x0008, 0x0060, "Modality", "must be XA or RF", "absent");
+  gdcm::MediaStorage ms;
+  ms.SetFromFile(file);
+  GIMM_CHECK(ms != gdcm::MediaStorage::EnhancedXAImageStorage,
+             path << ": an Enhanced XA image: its geometry is in per-frame functional groups, "
+                     "which gimm does not read yet (XA and XRF Image Storage are read)");
+  const bool xa_class = ms == gdcm::MediaStorage::XRayAngiographicImageStorage ||
+                        ms == gdcm::MediaStorage::XRayRadiofluoroscopingImageStorage;
+  GIMM_CHECK((modality && (*modality == "XA" || *modality == "RF")) || (!modality && xa_class),
+             path << ": not an X-ray angiogram: (0008,0060) Modality is "
+                  << (modality ? "'" + *modality + "'" : std::string("absent")) << " (SOP class "
+                  << (ms.GetString() ? ms.GetString() : "unknown") << "); XA or RF expected");
+
+  // Pixels.
+  const gdcm::PixelFormat& pf = image.GetPixelFormat();
+  GIMM_CHECK(pf.GetSamplesPerPixel() == 1, path << ": (0028,0002) SamplesPerPixel is "
+                                                << pf.GetSamplesPerPixel()
+                                                << "; an angiogram has one sample per pixel");
+  GIMM_CHECK(
+      pf.GetBitsAllocated() == 8 || pf.GetBitsAllocated() == 16,
+      path << ": (0028,0100) BitsAllocated is " << pf.GetBitsAllocated() << "; 8 or 16 expected");
+  const int cols = int(image.GetDimension(0)), rows = int(image.GetDimension(1));
+  out.frames = image.GetNumberOfDimensions() > 2 ? int(image.GetDimension(2)) : 1;
+  GIMM_CHECK(rows > 0 && cols > 0 && rows <= 16384 && cols <= 16384 && out.frames > 0,
+             path << ": image size " << cols << " x " << rows << " x " << out.frames
+                  << " frames is out of range (1..16384 per side)");
+  out.frame = options.frame.value_or(out.frames / 2);
+  GIMM_CHECK(out.frame >= 0 && out.frame < out.frames,
+             path << ": frame " << out.frame << " is out of range: the file has " << out.frames
+                  << (out.frames == 1 ? " frame (index 0)"
+                                      : " frames (0.." + std::to_string(out.frames - 1) + ")"));
+  const std::size_t bytes = std::size_t(pf.GetBitsAllocated() / 8);
+  const std::size_t frame_bytes = std::size_t(rows) * std::size_t(cols) * bytes;
+  GIMM_CHECK(image.GetBufferLength() == frame_bytes * std::size_t(out.frames),
+             path << ": pixel buffer of " << image.GetBufferLength() << " bytes, expected "
+                  << frame_bytes * std::size_t(out.frames));
+  GIMM_CHECK(image.GetBufferLength() <= (std::size_t(1) << 32),
+             path << ": " << image.GetBufferLength() << " bytes of pixels is more than 4 GiB");
+  std::vector<char> buffer(image.GetBufferLength());
+  GIMM_CHECK(image.GetBuffer(buffer.data()),
+             path << ": GDCM could not decode the pixels (transfer syntax "
+                  << gdcm::TransferSyntax::GetTSString(image.GetTransferSyntax()) << ")");
+  const bool is_signed = pf.GetPixelRepresentation() == 1;
+  std::vector<double> values(std::size_t(rows) * cols);
+  const char* frame_data = buffer.data() + frame_bytes * std::size_t(out.frame);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    if (bytes == 1)
+      values[k] =
+          is_signed ? double(std::int8_t(frame_data[k])) : double(std::uint8_t(frame_data[k]));
+    else {
+      std::uint16_t u;
+      std::memcpy(&u, frame_data + 2 * k, 2);
+      values[k] = is_signed ? double(std::int16_t(u)) : double(u);
+    }
+  }
+  const gdcm::PhotometricInterpretation pi = image.GetPhotometricInterpretation();
+  const bool monochrome1 = pi == gdcm::PhotometricInterpretation::MONOCHROME1;
+  GIMM_CHECK(monochrome1 || pi == gdcm::PhotometricInterpretation::MONOCHROME2,
+             path << ": (0028,0004) PhotometricInterpretation is "
+                  << detail::trimmed(gdcm::PhotometricInterpretation::GetPIString(pi))
+                  << "; MONOCHROME1 or MONOCHROME2 expected");
+  if (monochrome1)
+    for (double& v : values) v = -v;
+  const std::string pi_name = detail::trimmed(gdcm::PhotometricInterpretation::GetPIString(pi));
+  tags.uses.push_back({"(0028,0004)", "PhotometricInterpretation", pi_name,
+                       monochrome1 ? "inverted to MONOCHROME2" : "used as is"});
+  const Image<float> stored = detail::percentile_window(values, rows, cols);
+
+  // Orientation of the stored pixels relative to the detector.
+  const auto rotation = tags.numbers(0x0018, 0x7032, "FieldOfViewRotation",
+                                     "undone (stored pixels turned back)", "absent: 0", 1);
+  int rotation_deg = 0;
+  if (rotation) {
+    const double r = rotation->front();
+    GIMM_CHECK(r == 0 || r == 90 || r == 180 || r == 270,
+               path << ": (0018,7032) FieldOfViewRotation must be 0, 90, 180 or 270, got " << r);
+    rotation_deg = int(r);
+  }
+  const auto flip = tags.text(0x0018, 0x7034, "FieldOfViewHorizontalFlip",
+                              "undone (stored pixels flipped back)", "absent: NO");
+  GIMM_CHECK(
+      !flip || *flip == "YES" || *flip == "NO",
+      path << ": (0018,7034) FieldOfViewHorizontalFlip must be YES or NO, got '" << *flip << "'");
+  out.image = detail::to_detector_orientation(stored, rotation_deg, flip && *flip == "YES");
+  CArm& carm = out.carm;
+  carm.rows = out.image.rows();
+  carm.cols = out.image.cols();
+
+  // Angles and distances.
+  carm.primary_deg = tags.required(0x0018, 0x1510, "PositionerPrimaryAngle", "primary angle, +LAO");
+  carm.secondary_deg =
+      tags.required(0x0018, 0x1511, "PositionerSecondaryAngle", "secondary angle, +cranial");
+  carm.sid_mm = tags.required(0x0018, 0x1110, "DistanceSourceToDetector", "SID, mm");
+  carm.sod_mm = tags.required(0x0018, 0x1111, "DistanceSourceToPatient", "SOD (to isocentre), mm");
+
+  // Pixel pitch at the detector (row spacing, column spacing), in stored orientation.
+  const auto imager =
+      tags.numbers(0x0018, 0x1164, "ImagerPixelSpacing",
+                   options.pitch_mm ? "overridden by the given pitch"
+                                    : "pixel pitch at the detector (row\\column), mm",
+                   "absent", 2);
+  const auto intensifier = tags.numbers(
+      0x0018, 0x1162, "IntensifierSize",
+      !imager && !options.pitch_mm ? "pitch = IntensifierSize / Columns (fallback)" : "not needed",
+      "absent", 1);
+  double row_pitch = 0, col_pitch = 0;
+  if (options.pitch_mm) {
+    GIMM_CHECK(std::isfinite(*options.pitch_mm) && *options.pitch_mm > 0,
+               "the given pixel pitch must be > 0 mm, got " << *options.pitch_mm);
+    row_pitch = col_pitch = *options.pitch_mm;
+  } else if (imager) {
+    row_pitch = (*imager)[0];
+    col_pitch = (*imager)[1];
+  } else {
+    GIMM_CHECK(intensifier, path << ": neither (0018,1164) ImagerPixelSpacing nor (0018,1162) "
+                                    "IntensifierSize is present; give the detector pixel pitch "
+                                    "(--pixel MM)");
+    row_pitch = col_pitch = intensifier->front() / double(cols);
+    out.warnings.push_back(
+        "(0018,1164) ImagerPixelSpacing is absent: pixel pitch = (0018,1162) "
+        "IntensifierSize / Columns = " +
+        std::to_string(col_pitch) + " mm (worth a few px; --pixel overrides)");
+  }
+  GIMM_CHECK(row_pitch > 0 && col_pitch > 0,
+             path << ": pixel pitch must be > 0 mm, got " << row_pitch << " x " << col_pitch);
+  if (rotation_deg == 90 || rotation_deg == 270) std::swap(row_pitch, col_pitch);
+  carm.pixel_mm = col_pitch;
+  if (row_pitch != col_pitch) carm.pixel_row_mm = row_pitch;
+
+  // Principal point: the detector's centre placed in the image when the file says where the
+  // field of view sits on the detector; else the image centre.
+  const auto fov_origin = tags.numbers(0x0018, 0x7030, "FieldOfViewOrigin",
+                                       "field of view's corner on the detector (row\\column, "
+                                       "detector pixels)",
+                                       "absent: principal point at the image centre", 2);
+  const auto active = tags.numbers(0x0018, 0x7026, "DetectorActiveDimensions",
+                                   "detector size (row\\column), mm", "absent", 2);
+  const auto element = tags.numbers(0x0018, 0x7022, "DetectorElementSpacing",
+                                    "detector element pitch (row\\column), mm", "absent", 2);
+  if (fov_origin && active && element) {
+    GIMM_CHECK(imager, path << ": FieldOfViewOrigin needs (0018,1164) ImagerPixelSpacing");
+    // Stored pixel j covers detector pixels origin + j * bin ... ; its centre is at detector
+    // pixel origin + (j + 0.5) bin - 0.5, bin = pitch / element pitch.
+    Eigen::Vector2d pp_stored;              // (u = column, v = row) in stored orientation
+    for (int axis = 0; axis < 2; ++axis) {  // 0: row, 1: column
+      GIMM_CHECK((*element)[axis] > 0, path << ": (0018,7022) DetectorElementSpacing must be > 0");
+      const double centre = (*active)[axis] / (*element)[axis] / 2.0 - 0.5;
+      const double bin = (axis == 0 ? (*imager)[0] : (*imager)[1]) / (*element)[axis];
+      const double stored_index = (centre - (*fov_origin)[axis] + 0.5) / bin - 0.5;
+      pp_stored[1 - axis] = stored_index;
+    }
+    // Carry the point through the same flip and turns as the pixels.
+    Eigen::Vector2d p = pp_stored;
+    int w = cols, h = rows;
+    if (flip && *flip == "YES") p.x() = w - 1 - p.x();
+    for (int q = 0; q < (rotation_deg / 90) % 4; ++q) {
+      p = Eigen::Vector2d(p.y(), w - 1 - p.x());
+      std::swap(w, h);
+    }
+    carm.principal_point = p;
+  }
+
+  // Patient position and table.
+  const auto position = tags.text(0x0018, 0x5100, "PatientPosition", "table axes to patient axes",
+                                  "absent: HFS assumed");
+  if (!position)
+    out.warnings.push_back(
+        "(0018,5100) PatientPosition is absent: head-first supine (HFS) assumed");
+  else
+    GIMM_CHECK(*position == "HFS" || *position == "FFS",
+               path << ": (0018,5100) PatientPosition is " << *position
+                    << "; gimm maps the table for HFS and FFS only");
+  carm.patient_position =
+      position && *position == "FFS" ? PatientPosition::FFS : PatientPosition::HFS;
+  const auto creator = tags.text(0x0019, 0x0010, "PrivateCreator(0019,10xx)",
+                                 "GE's table tags when it starts with GEMS", "absent");
+  const bool ge = creator && creator->rfind("GEMS", 0) == 0;
+  const auto table_tag = [&](std::uint16_t g, std::uint16_t e, const char* name, bool use) {
+    return use ? tags.numbers(g, e, name, "table position, mm", "absent", 1)
+               : std::optional<std::vector<double>>{};
+  };
+  auto vertical = table_tag(0x0019, 0x1021, "GE TableVertical", ge);
+  auto longitudinal = table_tag(0x0019, 0x1022, "GE TableLongitudinal", ge);
+  auto lateral = table_tag(0x0019, 0x1023, "GE TableLateral", ge);
+  if (vertical || longitudinal || lateral) {
+    out.table_source = "GE private (0019,1021-1023)";
+  } else {
+    vertical =
+        tags.numbers(0x300A, 0x0128, "TableTopVerticalPosition", "table position, mm", "absent", 1);
+    longitudinal = tags.numbers(0x300A, 0x0129, "TableTopLongitudinalPosition",
+                                "table position, mm", "absent", 1);
+    lateral =
+        tags.numbers(0x300A, 0x012A, "TableTopLateralPosition", "table position, mm", "absent", 1);
+    if (vertical || longitudinal || lateral) out.table_source = "standard (300A,0128-012A)";
+  }
+  const auto or_zero = [](const std::optional<std::vector<double>>& v) {
+    return v ? v->front() : 0.0;
+  };
+  carm.table_mm = {or_zero(lateral), or_zero(vertical), or_zero(longitudinal)};
+  carm.reference_table_mm = carm.table_mm;
+  out.tags = std::move(tags.uses);
+  try {
+    carm.validate();
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
+  return out;
+}
+
+/// The explain report: every tag looked at, its value and use; then the warnings.
+inline std::string explain(const XaFrame& frame) {
+  std::ostringstream os;
+  os << frame.path << ": frame " << frame.frame << " of " << frame.frames << ", " << frame.carm.cols
+     << " x " << frame.carm.rows << " px; table: " << frame.table_source << "\n";
+  for (const auto& t : frame.tags)
+    os << "  " << t.tag << " " << t.name << " = " << t.value << "  -> " << t.use << "\n";
+  for (const auto& w : frame.warnings) os << "  warning: " << w << "\n";
+  return os.str();
+}
+
+/// Writes `image` ([0, 1], MONOCHROME2) as a single-frame 16-bit XA file with the C-arm's
+/// angles, distances, pixel pitch and table (GE-style private tags when `ge_table`, else the
+/// standard ones). For exporting renders and for tests; the principal point must be the centre.
+inline void write_xa_dicom(const std::string& path, const Image<float>& image, const CArm& carm,
+                           bool ge_table = false) {
+  detail::quiet_gdcm();
+  carm.validate();
+  GIMM_CHECK(image.rows() == carm.rows && image.cols() == carm.cols,
+             path << ": image is " << image.cols() << " x " << image.rows() << ", C-arm "
+                  << carm.cols << " x " << carm.rows);
+  GIMM_CHECK(
+      !carm.principal_point ||
+          (*carm.principal_point - Eigen::Vector2d((carm.cols - 1) / 2.0, (carm.rows - 1) / 2.0))
+                  .norm() < 1e-9,
+      path << ": write_xa_dicom writes centred principal points only");
+  gdcm::ImageWriter writer;
+  gdcm::Image& out = writer.GetImage();
+  out.SetNumberOfDimensions(2);
+  out.SetDimension(0, unsigned(image.cols()));
+  out.SetDimension(1, unsigned(image.rows()));
+  out.SetPixelFormat(gdcm::PixelFormat::UINT16);
+  out.SetPhotometricInterpretation(gdcm::PhotometricInterpretation::MONOCHROME2);
+  out.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
+  // GDCM writes an XA image's spacing as ImagerPixelSpacing (row \ column).
+  out.SetSpacing(0, carm.pixel_mm);
+  out.SetSpacing(1, carm.row_pixel_mm());
+  std::vector<std::uint16_t> pixels(std::size_t(image.rows()) * image.cols());
+  for (int r = 0; r < image.rows(); ++r)
+    for (int c = 0; c < image.cols(); ++c) {
+      const float v = image(r, c);
+      GIMM_CHECK(std::isfinite(v), path << ": pixel (" << r << ", " << c << ") is " << v);
+      pixels[std::size_t(r) * image.cols() + c] =
+          std::uint16_t(std::lround(std::clamp(v, 0.0f, 1.0f) * 65535.0f));
+    }
+  gdcm::DataElement pixel_data(gdcm::Tag(0x7fe0, 0x0010));
+  pixel_data.SetByteValue(reinterpret_cast<const char*>(pixels.data()),
+                          std::uint32_t(pixels.size() * 2));
+  out.SetDataElement(pixel_data);
+
+  gdcm::File& file = writer.GetFile();
+  gdcm::DataSet& ds = file.GetDataSet();
+  const auto put = [&](std::uint16_t g, std::uint16_t e, gdcm::VR vr, std::string value) {
+    if (value.size() % 2) value += ' ';
+    gdcm::DataElement de(gdcm::Tag(g, e));
+    de.SetVR(vr);
+    de.SetByteValue(value.data(), std::uint32_t(value.size()));
+    ds.Replace(de);
+  };
+  const auto number = [](double x) {
+    std::ostringstream os;
+    os.precision(12);  // DS holds at most 16 characters
+    os << x;
+    std::string s = os.str();
+    GIMM_CHECK(s.size() <= 16, "write_xa_dicom: " << x << " does not fit a DICOM DS");
+    return s;
+  };
+  gdcm::UIDGenerator uid;
+  put(0x0008, 0x0016, gdcm::VR::UI,
+      gdcm::MediaStorage::GetMSString(gdcm::MediaStorage::XRayAngiographicImageStorage));
+  put(0x0008, 0x0018, gdcm::VR::UI, uid.Generate());
+  put(0x0008, 0x0060, gdcm::VR::CS, "XA");
+  put(0x0018, 0x1510, gdcm::VR::DS, number(carm.primary_deg));
+  put(0x0018, 0x1511, gdcm::VR::DS, number(carm.secondary_deg));
+  put(0x0018, 0x1110, gdcm::VR::DS, number(carm.sid_mm));
+  put(0x0018, 0x1111, gdcm::VR::DS, number(carm.sod_mm));
+  put(0x0018, 0x5100, gdcm::VR::CS, to_string(carm.patient_position));
+  if (ge_table) {
+    put(0x0019, 0x0010, gdcm::VR::LO, "GEMS_ACQU_01");
+    put(0x0019, 0x1021, gdcm::VR::DS, number(carm.table_mm.y()));
+    put(0x0019, 0x1022, gdcm::VR::DS, number(carm.table_mm.z()));
+    put(0x0019, 0x1023, gdcm::VR::DS, number(carm.table_mm.x()));
+  } else {
+    put(0x300A, 0x0128, gdcm::VR::DS, number(carm.table_mm.y()));
+    put(0x300A, 0x0129, gdcm::VR::DS, number(carm.table_mm.z()));
+    put(0x300A, 0x012A, gdcm::VR::DS, number(carm.table_mm.x()));
+  }
+  std::ostringstream bytes;
+  writer.SetStream(bytes);
+  GIMM_CHECK(writer.Write(), path << ": GDCM could not encode the file");
+  write_file_atomic(path, bytes.str());
+}
+
+}  // namespace gimm

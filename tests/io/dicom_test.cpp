@@ -1,0 +1,444 @@
+// X-ray angiography DICOM in (io/dicom.hpp). The files are written here with GDCM's own writer,
+// tag by tag, not with gimm's write_xa_dicom, so a tag read from the wrong place fails.
+#include <gdcmImageChangeTransferSyntax.h>
+#include <gdcmImageWriter.h>
+#include <gdcmReader.h>
+#include <gdcmWriter.h>
+
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "gimm/geometry/epipolar.hpp"
+#include "gimm/io/dicom.hpp"
+#include "gimm/labels/views.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tmp(const std::string& name) {
+  fs::create_directories(fs::path(GIMM_TEST_TMP) / "dicom");
+  return fs::path(GIMM_TEST_TMP) / "dicom" / name;
+}
+
+/// What a test file holds. Pixel (r, c) of frame f is value(f, r, c).
+struct Spec {
+  int rows = 6, cols = 8, frames = 1, bits = 16;
+  bool monochrome1 = false;
+  gdcm::TransferSyntax::TSType syntax = gdcm::TransferSyntax::ExplicitVRLittleEndian;
+  std::string modality = "XA";
+  /// (group, element) -> (VR, value); the geometry of a plain XA file by default.
+  std::map<std::pair<std::uint16_t, std::uint16_t>, std::pair<gdcm::VR::VRType, std::string>> tags =
+      {{{0x0018, 0x1510}, {gdcm::VR::DS, "-31.5"}},    {{0x0018, 0x1511}, {gdcm::VR::DS, "22.25"}},
+       {{0x0018, 0x1110}, {gdcm::VR::DS, "1100"}},     {{0x0018, 0x1111}, {gdcm::VR::DS, "765.5"}},
+       {{0x0018, 0x1164}, {gdcm::VR::DS, "0.3\\0.2"}}, {{0x0018, 0x5100}, {gdcm::VR::CS, "HFS"}}};
+  /// Even frames grow along the rows, odd frames shrink: frames are told apart by their order.
+  static int value(int f, int r, int c) {
+    return f % 2 ? 1000 + f - 10 * r - c : 100 * f + 10 * r + c;
+  }
+};
+
+void write_spec(const fs::path& path, const Spec& spec) {
+  // The image lives in the writer: GDCM's smart pointers would free an image on the stack.
+  gdcm::ImageWriter writer;
+  gdcm::Image& image = writer.GetImage();
+  image.SetNumberOfDimensions(spec.frames > 1 ? 3 : 2);
+  image.SetDimension(0, unsigned(spec.cols));
+  image.SetDimension(1, unsigned(spec.rows));
+  if (spec.frames > 1) image.SetDimension(2, unsigned(spec.frames));
+  image.SetPixelFormat(spec.bits == 8 ? gdcm::PixelFormat::UINT8 : gdcm::PixelFormat::UINT16);
+  image.SetPhotometricInterpretation(spec.monochrome1
+                                         ? gdcm::PhotometricInterpretation::MONOCHROME1
+                                         : gdcm::PhotometricInterpretation::MONOCHROME2);
+  image.SetTransferSyntax(gdcm::TransferSyntax::ExplicitVRLittleEndian);
+  std::vector<char> bytes;
+  for (int f = 0; f < spec.frames; ++f)
+    for (int r = 0; r < spec.rows; ++r)
+      for (int c = 0; c < spec.cols; ++c) {
+        const int v = Spec::value(f, r, c);
+        if (spec.bits == 8) {
+          bytes.push_back(char(std::uint8_t(v % 256)));
+        } else {
+          bytes.push_back(char(v & 0xff));
+          bytes.push_back(char(v >> 8));
+        }
+      }
+  gdcm::DataElement pixels(gdcm::Tag(0x7fe0, 0x0010));
+  pixels.SetByteValue(bytes.data(), std::uint32_t(bytes.size()));
+  image.SetDataElement(pixels);
+  gdcm::ImageChangeTransferSyntax change;  // outlives the writer's use of its output
+  if (spec.syntax != gdcm::TransferSyntax::ExplicitVRLittleEndian) {
+    change.SetTransferSyntax(spec.syntax);
+    change.SetInput(image);
+    REQUIRE(change.Change());
+    writer.SetImage(change.GetOutput());
+  }
+  // GDCM's image writer writes the image's spacing as ImagerPixelSpacing: the tags are set on
+  // a second pass, through the plain writer, so that each is exactly what the spec says.
+  std::stringstream encoded;
+  writer.SetStream(encoded);
+  REQUIRE(writer.Write());
+  gdcm::Reader again;
+  again.SetStream(encoded);
+  REQUIRE(again.Read());
+  gdcm::DataSet& ds = again.GetFile().GetDataSet();
+  ds.Remove(gdcm::Tag(0x0018, 0x1164));
+  auto tags = spec.tags;
+  tags[{0x0008, 0x0060}] = {gdcm::VR::CS, spec.modality};
+  tags[{0x0008, 0x0016}] = {
+      gdcm::VR::UI,
+      gdcm::MediaStorage::GetMSString(spec.modality == "CT"
+                                          ? gdcm::MediaStorage::CTImageStorage
+                                          : gdcm::MediaStorage::XRayAngiographicImageStorage)};
+  for (const auto& [key, vr_value] : tags) {
+    std::string value = vr_value.second;
+    if (value.size() % 2) value += vr_value.first == gdcm::VR::UI ? '\0' : ' ';
+    gdcm::DataElement de(gdcm::Tag(key.first, key.second));
+    de.SetVR(vr_value.first);
+    de.SetByteValue(value.data(), std::uint32_t(value.size()));
+    ds.Replace(de);
+  }
+  gdcm::Writer out;
+  out.SetFile(again.GetFile());
+  out.SetFileName(path.c_str());
+  REQUIRE(out.Write());
+}
+
+/// The stored values of the frame read back: the reader windows by percentiles, so compare
+/// orders, not values: the frame read must rank its pixels as `expected` does.
+void check_same_order(const gimm::Image<float>& got,
+                      const std::vector<std::vector<int>>& expected) {
+  REQUIRE(got.rows() == int(expected.size()));
+  REQUIRE(got.cols() == int(expected[0].size()));
+  for (int r = 0; r < got.rows(); ++r)
+    for (int c = 0; c + 1 < got.cols(); ++c) {
+      const int e0 = expected[std::size_t(r)][std::size_t(c)];
+      const int e1 = expected[std::size_t(r)][std::size_t(c + 1)];
+      if (e0 < e1) CHECK(got(r, c) <= got(r, c + 1));
+      if (e0 > e1) CHECK(got(r, c) >= got(r, c + 1));
+    }
+}
+
+std::vector<std::vector<int>> frame_values(const Spec& spec, int f) {
+  std::vector<std::vector<int>> out(std::size_t(spec.rows),
+                                    std::vector<int>(std::size_t(spec.cols)));
+  for (int r = 0; r < spec.rows; ++r)
+    for (int c = 0; c < spec.cols; ++c)
+      out[std::size_t(r)][std::size_t(c)] = Spec::value(f, r, c) % (spec.bits == 8 ? 256 : 65536);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("DICOM: each geometry tag lands in its CArm field", "[io][dicom]") {
+  const Spec spec;
+  write_spec(tmp("plain.dcm"), spec);
+  const gimm::XaFrame f = gimm::read_xa_dicom(tmp("plain.dcm").string());
+  CHECK(f.carm.primary_deg == -31.5);
+  CHECK(f.carm.secondary_deg == 22.25);
+  CHECK(f.carm.sid_mm == 1100);
+  CHECK(f.carm.sod_mm == 765.5);
+  CHECK(f.carm.rows == 6);
+  CHECK(f.carm.cols == 8);
+  // ImagerPixelSpacing is row spacing \ column spacing: 0.3 mm down the rows, 0.2 across.
+  CHECK(f.carm.pixel_mm == 0.2);
+  CHECK(f.carm.row_pixel_mm() == 0.3);
+  const gimm::Camerad camera = f.carm.camera();
+  CHECK(camera.K()(0, 0) == Approx(1100 / 0.2));
+  CHECK(camera.K()(1, 1) == Approx(-1100 / 0.3));
+  CHECK(camera.K()(0, 2) == Approx(3.5));  // the image centre, (cols - 1) / 2
+  CHECK(camera.K()(1, 2) == Approx(2.5));
+  CHECK(f.carm.patient_position == gimm::PatientPosition::HFS);
+  CHECK(f.table_source == "none");
+  CHECK(f.carm.table_shift().isZero());
+  CHECK(f.warnings.empty());
+  // Every tag looked at is reported; the missing ones say so.
+  const std::string report = gimm::explain(f);
+  CHECK_THAT(report, Catch::Contains("(0018,1510) PositionerPrimaryAngle = -31.5"));
+  CHECK_THAT(report, Catch::Contains("(0018,1162) IntensifierSize = absent"));
+  CHECK_THAT(report, Catch::Contains("(300A,0128) TableTopVerticalPosition = absent"));
+}
+
+TEST_CASE("DICOM: a written C-arm reads back as the same camera", "[io][dicom]") {
+  gimm::CArm carm;
+  carm.primary_deg = -27.5;
+  carm.secondary_deg = 18.125;
+  carm.sid_mm = 1195.5;
+  carm.sod_mm = 810.25;
+  carm.rows = 40;
+  carm.cols = 48;
+  carm.pixel_mm = 0.3125;
+  carm.table_mm = {12.5, -40.25, 310};
+  gimm::Image<float> image(carm.rows, carm.cols);
+  for (int r = 0; r < carm.rows; ++r)
+    for (int c = 0; c < carm.cols; ++c) image(r, c) = float(r * carm.cols + c) / 2000.0f;
+  for (bool ge : {false, true}) {
+    const fs::path path = tmp(ge ? "roundtrip_ge.dcm" : "roundtrip.dcm");
+    gimm::write_xa_dicom(path.string(), image, carm, ge);
+    gimm::XaFrame f = gimm::read_xa_dicom(path.string());
+    CHECK(f.table_source == (ge ? "GE private (0019,1021-1023)" : "standard (300A,0128-012A)"));
+    CHECK((f.carm.table_mm - carm.table_mm).norm() == 0);
+    // Against a reference view with the table at zero, the isocentre moved by the table.
+    f.carm.reference_table_mm.setZero();
+    const gimm::Camerad expected = carm.camera(), got = f.carm.camera();
+    double worst = 0;
+    for (const Eigen::Vector3d& X :
+         {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(40, -30, 60), Eigen::Vector3d(-55, 20, 330)})
+      worst = std::max(worst, (expected.project(X).uv - got.project(X).uv).norm());
+    CHECK(worst < 1e-9);
+    CHECK((f.image.data()[1000] < f.image.data()[1001]));
+  }
+}
+
+TEST_CASE("DICOM: the table's change moves the isocentre to +x, +y, +z (HFS)", "[io][dicom]") {
+  // The convention verified on a GE system: vertical -> +y, longitudinal -> +z,
+  // lateral -> +x, for the change from the reference view. Flip any sign and this fails.
+  Spec a, b;
+  a.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "GEMS_ACQU_01"};
+  a.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "100"};   // vertical
+  a.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "-200"};  // longitudinal
+  a.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "5"};     // lateral
+  b.tags = a.tags;
+  b.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "110"};
+  b.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "-170"};
+  b.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "-2"};
+  write_spec(tmp("table_a.dcm"), a);
+  write_spec(tmp("table_b.dcm"), b);
+  const gimm::XaFrame fa = gimm::read_xa_dicom(tmp("table_a.dcm").string());
+  gimm::XaFrame fb = gimm::read_xa_dicom(tmp("table_b.dcm").string());
+  CHECK(fb.carm.table_mm == Eigen::Vector3d(-2, 110, -170));  // lateral, vertical, longitudinal
+  gimm::set_table_reference(fb, fa);
+  CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(-7, 10, 30));
+  CHECK(fa.carm.view_isocenter() == Eigen::Vector3d::Zero());
+  // Feet first: lateral and longitudinal turn round, vertical does not.
+  fb.carm.patient_position = gimm::PatientPosition::FFS;
+  CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(7, 10, -30));
+
+  // Without GE's private creator the (0019,10xx) values mean something else: not read.
+  Spec other = a;
+  other.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "SIEMENS MED"};
+  write_spec(tmp("table_other.dcm"), other);
+  const gimm::XaFrame fo = gimm::read_xa_dicom(tmp("table_other.dcm").string());
+  CHECK(fo.table_source == "none");
+  CHECK(fo.carm.table_mm.isZero());
+
+  // The standard tags, when GE's are absent.
+  Spec standard;
+  standard.tags[{0x300A, 0x0128}] = {gdcm::VR::DS, "7"};
+  standard.tags[{0x300A, 0x0129}] = {gdcm::VR::DS, "8"};
+  standard.tags[{0x300A, 0x012A}] = {gdcm::VR::DS, "9"};
+  write_spec(tmp("table_standard.dcm"), standard);
+  const gimm::XaFrame fs_ = gimm::read_xa_dicom(tmp("table_standard.dcm").string());
+  CHECK(fs_.table_source == "standard (300A,0128-012A)");
+  CHECK(fs_.carm.table_mm == Eigen::Vector3d(9, 7, 8));
+}
+
+TEST_CASE("DICOM: frames, bit depths, MONOCHROME1 and compressed syntaxes", "[io][dicom]") {
+  SECTION("multi-frame: the middle frame by default, any frame on request") {
+    Spec spec;
+    spec.frames = 5;
+    write_spec(tmp("multi.dcm"), spec);
+    const gimm::XaFrame middle = gimm::read_xa_dicom(tmp("multi.dcm").string());
+    CHECK(middle.frames == 5);
+    CHECK(middle.frame == 2);
+    check_same_order(middle.image, frame_values(spec, 2));
+    gimm::DicomReadOptions odd;
+    odd.frame = 1;
+    const gimm::XaFrame second = gimm::read_xa_dicom(tmp("multi.dcm").string(), odd);
+    CHECK(second.frame == 1);
+    check_same_order(second.image, frame_values(spec, 1));
+    CHECK(second.image(0, 1) > second.image(0, 2));  // (0, 0) and (0, 1) clip to 1
+    gimm::DicomReadOptions past;
+    past.frame = 5;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("multi.dcm").string(), past),
+                      Catch::Contains("multi.dcm") && Catch::Contains("frame 5 is out of range") &&
+                          Catch::Contains("0..4"));
+  }
+  SECTION("8-bit") {
+    Spec spec;
+    spec.bits = 8;
+    write_spec(tmp("8bit.dcm"), spec);
+    check_same_order(gimm::read_xa_dicom(tmp("8bit.dcm").string()).image, frame_values(spec, 0));
+  }
+  SECTION("MONOCHROME1 is inverted: a high stored value reads dark") {
+    Spec spec;
+    spec.monochrome1 = true;
+    write_spec(tmp("mono1.dcm"), spec);
+    const gimm::XaFrame f = gimm::read_xa_dicom(tmp("mono1.dcm").string());
+    CHECK(f.image(0, 0) > f.image(5, 7));  // stored 0 is white, stored 57 black
+    CHECK(f.image(0, 0) == 1.0f);
+    CHECK(f.image(5, 7) == 0.0f);
+    CHECK_THAT(gimm::explain(f), Catch::Contains("MONOCHROME1  -> inverted"));
+  }
+  SECTION("RLE, JPEG lossless and JPEG-LS decode to the uncompressed pixels") {
+    Spec plain;
+    plain.rows = 16;
+    plain.cols = 16;
+    write_spec(tmp("uncompressed.dcm"), plain);
+    const gimm::XaFrame expected = gimm::read_xa_dicom(tmp("uncompressed.dcm").string());
+    for (const auto syntax :
+         {gdcm::TransferSyntax::RLELossless, gdcm::TransferSyntax::JPEGLosslessProcess14_1,
+          gdcm::TransferSyntax::JPEGLSLossless}) {
+      Spec spec = plain;
+      spec.syntax = syntax;
+      const fs::path path = tmp(std::string("syntax_") + std::to_string(int(syntax)) + ".dcm");
+      write_spec(path, spec);
+      const gimm::XaFrame got = gimm::read_xa_dicom(path.string());
+      INFO(gdcm::TransferSyntax::GetTSString(syntax));
+      REQUIRE(got.image.rows() == expected.image.rows());
+      CHECK(std::equal(got.image.data(), got.image.data() + got.image.size(),
+                       expected.image.data()));
+    }
+  }
+}
+
+TEST_CASE("DICOM: pixel pitch fallbacks say what they used", "[io][dicom]") {
+  Spec spec;
+  spec.tags.erase({0x0018, 0x1164});
+  write_spec(tmp("no_pitch.dcm"), spec);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("no_pitch.dcm").string()),
+                    Catch::Contains("no_pitch.dcm") && Catch::Contains("(0018,1164)") &&
+                        Catch::Contains("(0018,1162)"));
+  gimm::DicomReadOptions given;
+  given.pitch_mm = 0.25;
+  CHECK(gimm::read_xa_dicom(tmp("no_pitch.dcm").string(), given).carm.pixel_mm == 0.25);
+
+  spec.tags[{0x0018, 0x1162}] = {gdcm::VR::DS, "240"};
+  write_spec(tmp("intensifier.dcm"), spec);
+  const gimm::XaFrame f = gimm::read_xa_dicom(tmp("intensifier.dcm").string());
+  CHECK(f.carm.pixel_mm == Approx(240.0 / 8));  // IntensifierSize / Columns
+  CHECK(f.carm.pixel_row_mm == 0);
+  REQUIRE(f.warnings.size() == 1);
+  CHECK_THAT(f.warnings[0], Catch::Contains("IntensifierSize / Columns"));
+}
+
+TEST_CASE("DICOM: field-of-view rotation and flip are undone", "[io][dicom]") {
+  // Stored = flip(rotate_cw(detector)). A 90-degree turn swaps rows and columns and the pitch.
+  Spec spec;
+  spec.tags[{0x0018, 0x7032}] = {gdcm::VR::DS, "90"};
+  write_spec(tmp("rot90.dcm"), spec);
+  const gimm::XaFrame f = gimm::read_xa_dicom(tmp("rot90.dcm").string());
+  CHECK(f.carm.rows == 8);
+  CHECK(f.carm.cols == 6);
+  CHECK(f.carm.pixel_mm == 0.3);  // the stored rows' spacing is now across the columns
+  CHECK(f.carm.row_pixel_mm() == 0.2);
+  // A clockwise turn puts detector (i, j) at stored (j, rows_d - 1 - i), so stored (r, c) is
+  // detector (rows_d - 1 - c, r), rows_d = 8; stored values grow with c.
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c + 1 < 8; ++c)
+      CHECK(f.image(8 - 1 - c, r) <= f.image(8 - 1 - (c + 1), r));  // value grows with stored c
+
+  Spec flipped;
+  flipped.tags[{0x0018, 0x7034}] = {gdcm::VR::CS, "YES"};
+  write_spec(tmp("flip.dcm"), flipped);
+  const gimm::XaFrame g = gimm::read_xa_dicom(tmp("flip.dcm").string());
+  CHECK(g.image(0, 0) > g.image(0, 7));  // stored values grow to the right; flipped back
+
+  spec.tags[{0x0018, 0x7032}] = {gdcm::VR::DS, "45"};
+  write_spec(tmp("rot45.dcm"), spec);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("rot45.dcm").string()),
+                    Catch::Contains("(0018,7032)") && Catch::Contains("45"));
+}
+
+TEST_CASE("DICOM: the field of view's place on the detector sets the principal point",
+          "[io][dicom]") {
+  // A 100 x 120 mm detector of 0.1 mm elements; the image is a 2x-binned field of view whose
+  // corner is at detector pixel (row 300, column 350). The detector's centre (499.5, 599.5)
+  // is then image (row (499.5 - 300 + 0.5) / 2 - 0.5, column (599.5 - 350 + 0.5) / 2 - 0.5).
+  Spec spec;
+  spec.tags[{0x0018, 0x1164}] = {gdcm::VR::DS, "0.2\\0.2"};
+  spec.tags[{0x0018, 0x7030}] = {gdcm::VR::DS, "300\\350"};
+  spec.tags[{0x0018, 0x7026}] = {gdcm::VR::DS, "100\\120"};
+  spec.tags[{0x0018, 0x7022}] = {gdcm::VR::DS, "0.1\\0.1"};
+  write_spec(tmp("fov.dcm"), spec);
+  const gimm::XaFrame f = gimm::read_xa_dicom(tmp("fov.dcm").string());
+  REQUIRE(f.carm.principal_point);
+  CHECK(f.carm.principal_point->x() == Approx(124.5));  // u = column
+  CHECK(f.carm.principal_point->y() == Approx(99.5));   // v = row
+}
+
+TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
+  { std::ofstream(tmp("text.dcm")) << "not a DICOM file at all"; }
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("text.dcm").string()),
+                    Catch::Contains("text.dcm") && Catch::Contains("not a DICOM file"));
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("missing.dcm").string()),
+                    Catch::Contains("missing.dcm") && Catch::Contains("no such file"));
+
+  Spec ct;
+  ct.modality = "CT";
+  write_spec(tmp("ct.dcm"), ct);
+  CHECK_THROWS_WITH(
+      gimm::read_xa_dicom(tmp("ct.dcm").string()),
+      Catch::Contains("ct.dcm") && Catch::Contains("(0008,0060)") && Catch::Contains("'CT'"));
+
+  for (const std::uint16_t element : {0x1510, 0x1511, 0x1110, 0x1111}) {
+    Spec spec;
+    spec.tags.erase({0x0018, element});
+    write_spec(tmp("missing_tag.dcm"), spec);
+    char tag[16];
+    std::snprintf(tag, sizeof tag, "(0018,%04X)", element);
+    CHECK_THROWS_WITH(
+        gimm::read_xa_dicom(tmp("missing_tag.dcm").string()),
+        Catch::Contains("missing_tag.dcm") && Catch::Contains(tag) && Catch::Contains("missing"));
+  }
+
+  Spec garbage;
+  garbage.tags[{0x0018, 0x1510}] = {gdcm::VR::DS, "left"};
+  write_spec(tmp("garbage.dcm"), garbage);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("garbage.dcm").string()),
+                    Catch::Contains("(0018,1510)") && Catch::Contains("'left'"));
+
+  Spec prone;
+  prone.tags[{0x0018, 0x5100}] = {gdcm::VR::CS, "HFP"};
+  write_spec(tmp("prone.dcm"), prone);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("prone.dcm").string()),
+                    Catch::Contains("(0018,5100)") && Catch::Contains("HFP"));
+
+  Spec no_position;
+  no_position.tags.erase({0x0018, 0x5100});
+  write_spec(tmp("no_position.dcm"), no_position);
+  const auto f = gimm::read_xa_dicom(tmp("no_position.dcm").string());
+  REQUIRE(f.warnings.size() == 1);
+  CHECK_THAT(f.warnings[0], Catch::Contains("HFS") && Catch::Contains("assumed"));
+
+  // A compressed syntax this build cannot decode: JPEG-LS pixels under the JPIP-referenced
+  // transfer syntax UID (same length, so only the UID changes).
+  Spec jpls;
+  jpls.syntax = gdcm::TransferSyntax::JPEGLSLossless;
+  write_spec(tmp("jpls.dcm"), jpls);
+  std::ifstream in(tmp("jpls.dcm"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "1.2.840.10008.1.2.4.80", to = "1.2.840.10008.1.2.4.94";
+  const auto at = bytes.find(from);
+  REQUIRE(at != std::string::npos);
+  bytes.replace(at, from.size(), to);
+  std::ofstream(tmp("jpip.dcm"), std::ios::binary) << bytes;
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("jpip.dcm").string()),
+                    Catch::Contains("jpip.dcm") && Catch::Contains("transfer syntax"));
+}
+
+TEST_CASE("View class from C-arm angles", "[labels][dicom]") {
+  // Inside a class's ranges: that class, at distance 0.
+  auto m = gimm::view_class_from_angles(gimm::CoronarySystem::LCA, 45, -28);
+  CHECK(m.id == 9);  // LCA LAO Caudal
+  CHECK(m.distance_deg == 0);
+  m = gimm::view_class_from_angles(gimm::CoronarySystem::RCA, 50, 0);
+  CHECK(m.id == 2);  // RCA LAO
+  // The same pose, the other system: its nearest LCA class.
+  m = gimm::view_class_from_angles(gimm::CoronarySystem::LCA, 50, 0);
+  CHECK(m.id == 8);  // LAO Cranial, 15 degrees of secondary away
+  CHECK(m.distance_deg == Approx(gimm::view_angle_between(50, 0, 50, 15)));
+  // Signs: RAO caudal is not LAO caudal.
+  CHECK(gimm::view_class_from_angles(gimm::CoronarySystem::LCA, -18, -20).id == 11);
+  CHECK(gimm::view_class_from_angles(gimm::CoronarySystem::LCA, 18, -20).id != 11);
+  // Without a system, all eleven; a pose far from every class has a large distance.
+  m = gimm::view_class_from_angles(std::nullopt, 120, 0);
+  CHECK(m.distance_deg > 50);
+  CHECK_THROWS_WITH(gimm::view_class_from_angles(std::nullopt, NAN, 0), Catch::Contains("finite"));
+}
