@@ -3,6 +3,10 @@
 //   gimm-eval --dataset DIR --predictions PRED_DIR [--top-k 20] [--out DIR] [--name NAME]
 //             [--split all|train|val|test] [--worst 10]
 //   gimm-eval --compare RUN1 RUN2 ... [--out DIR]      RUNs: --out directories of earlier runs
+//   gimm-eval --truth T.json... --matches P.json... [--radius 3] [--top-k 20] [--out DIR]
+//             a user's own sparse truth (gimm-truth/1, metrics/user_truth.hpp), no dataset
+//   gimm-eval --tree R.json... --centerlines C.json...   3D error of triangulated points against
+//             the true centerlines (gimm-tree/1 from gimm-match --tree; one C.json, or one each)
 // Prints a Markdown table (Prec@1/3/5 px, 2D and 3D errors, coverage, exact-geometry check);
 // with --out writes summary.json, table.md, worst_pairs.md and topk.tsv (compare: compare.md).
 // A pair without a predictions file counts as a pair with no matches (coverage 0).
@@ -13,7 +17,10 @@
 #include <iostream>
 
 #include "cli_common.hpp"
+#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/metrics/summary.hpp"
+#include "gimm/metrics/tree_error.hpp"
+#include "gimm/metrics/user_truth.hpp"
 
 namespace fs = std::filesystem;
 
@@ -215,6 +222,84 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
   return 0;
 }
 
+/// Pairs of a user's own truth files and prediction files, scored and tabled.
+int evaluate_user_truth(const std::vector<std::string>& truths,
+                        const std::vector<std::string>& predictions, double radius, long top_k,
+                        const std::string& out) {
+  GIMM_CHECK(truths.size() == predictions.size(), "--truth and --matches pair up: got "
+                                                      << truths.size() << " truth files and "
+                                                      << predictions.size() << " matches files");
+  std::vector<gimm::PairScore> pairs;
+  std::string rows;
+  for (std::size_t n = 0; n < truths.size(); ++n) {
+    const gimm::PairTruth truth = gimm::read_user_truth(truths[n], radius);
+    const gimm::PairMatches matches =
+        gimm::matches_from_json(gimm::read_json_file(predictions[n]), predictions[n]);
+    pairs.push_back(gimm::score_pair(truth, matches));
+    gimm::SummaryBuilder one(top_k);
+    one.add(pairs.back());
+    rows += gimm::markdown_row(truth.id, one.summary());
+  }
+  const std::string md = "## Own truth (top-K = " + k_label(top_k) + ", " +
+                         std::to_string(pairs.size()) + " pairs, truth radius " +
+                         gimm::fmt(radius, 1) + " px)\n\n" + gimm::markdown_header("pair") + rows +
+                         gimm::markdown_row("pooled", gimm::summarize(pairs, top_k));
+  std::cout << md;
+  if (!out.empty()) {
+    fs::create_directories(out);
+    gimm::write_all_or_nothing({fs::path(out) / "summary.json", fs::path(out) / "table.md"}, [&] {
+      gimm::write_json_file(fs::path(out) / "summary.json",
+                            {{"format", "gimm-eval/1"},
+                             {"method", "own truth"},
+                             {"top_k", top_k},
+                             {"pooled", gimm::to_json(gimm::summarize(pairs, top_k))}});
+      gimm::write_file_atomic(fs::path(out) / "table.md", md);
+    });
+  }
+  return 0;
+}
+
+/// Distances of triangulated points (gimm-tree/1) to the true centerlines.
+int evaluate_trees(const std::vector<std::string>& trees,
+                   const std::vector<std::string>& centerlines, const std::string& out) {
+  GIMM_CHECK(centerlines.size() == 1 || centerlines.size() == trees.size(),
+             "--centerlines: give one file, or one per --tree (" << trees.size() << "), got "
+                                                                 << centerlines.size());
+  std::vector<double> all;
+  std::string rows;
+  const auto stats_row = [](const std::string& name, const std::vector<double>& d) {
+    return "| " + name + " | " + std::to_string(d.size()) + " | " + gimm::fmt(gimm::mean_of(d), 2) +
+           " | " + gimm::fmt(gimm::percentile(d, 0.5), 2) + " | " +
+           gimm::fmt(gimm::percentile(d, 0.9), 2) + " |\n";
+  };
+  for (std::size_t n = 0; n < trees.size(); ++n) {
+    const gimm::CenterlineTree truth =
+        gimm::read_centerlines(centerlines[centerlines.size() == 1 ? 0 : n]);
+    const nlohmann::json j = gimm::read_json_file(trees[n]);
+    GIMM_CHECK_AS(gimm::FormatError,
+                  j.is_object() && j.value("format", "") == "gimm-tree/1" && j.contains("points") &&
+                      j.at("points").is_array(),
+                  trees[n] << ": not a gimm-tree/1 file (gimm-match --tree)");
+    std::vector<double> d;
+    for (const auto& p : j.at("points")) {
+      const Eigen::Vector3d X = gimm::matrix_from_json<3, 1>(p, "world_mm", trees[n]);
+      d.push_back(gimm::distance_to_centerlines(X, truth));
+    }
+    rows += stats_row(trees[n], d);
+    all.insert(all.end(), d.begin(), d.end());
+  }
+  const std::string md =
+      "## 3D error of the triangulated points against the true centerlines (mm)\n\n"
+      "| tree | points | mean | median | p90 |\n| --- | --- | --- | --- | --- |\n" +
+      rows + stats_row("pooled", all);
+  std::cout << md;
+  if (!out.empty()) {
+    fs::create_directories(out);
+    gimm::write_file_atomic(fs::path(out) / "tree_error.md", md);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -235,7 +320,33 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--worst", worst, "worst pairs listed")->capture_default_str();
   app.add_option("--compare", runs, "compare earlier runs (their --out directories)");
+  std::vector<std::string> truths, matches, trees, centerlines;
+  double radius = 3.0;
+  app.add_option("--truth", truths, "own sparse truth files (gimm-truth/1), one per pair")
+      ->check(CLI::ExistingFile);
+  app.add_option("--matches", matches, "with --truth: the matches files, in the same order")
+      ->check(CLI::ExistingFile);
+  app.add_option("--radius", radius,
+                 "with --truth: a match is scored when its source point is within this many px "
+                 "of a truth point")
+      ->capture_default_str();
+  app.add_option("--tree", trees, "triangulated points (gimm-tree/1) to score in 3D")
+      ->check(CLI::ExistingFile);
+  app.add_option("--centerlines", centerlines, "with --tree: the true centerlines JSON")
+      ->check(CLI::ExistingFile);
   return gimm::cli::run(app, argc, argv, [&] {
+    const bool dataset_mode = !dataset.empty() || !predictions.empty();
+    const int modes = int(!runs.empty()) + int(!truths.empty() || !matches.empty()) +
+                      int(!trees.empty() || !centerlines.empty()) + int(dataset_mode);
+    GIMM_CHECK(modes <= 1,
+               "give one of --dataset/--predictions, --compare, --truth/--matches or "
+               "--tree/--centerlines");
+    if (!truths.empty() || !matches.empty())
+      return evaluate_user_truth(truths, matches, radius, top_k, out);
+    if (!trees.empty() || !centerlines.empty()) {
+      GIMM_CHECK(!trees.empty() && !centerlines.empty(), "--tree and --centerlines go together");
+      return evaluate_trees(trees, centerlines, out);
+    }
     if (!runs.empty()) {
       GIMM_CHECK(dataset.empty() && predictions.empty(),
                  "--compare takes run directories only, not --dataset/--predictions");

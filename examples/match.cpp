@@ -280,6 +280,7 @@ int main(int argc, char** argv) {
   bool segment = false;
   std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
   int frame_a = -1, frame_b = -1;
+  std::vector<double> isocenter;
   double max_reprojection = 0;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
   app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
@@ -331,6 +332,10 @@ int main(int argc, char** argv) {
                  "view B: XA/XRF DICOM file; its table is taken relative "
                  "to A's")
       ->check(CLI::ExistingFile);
+  app.add_option("--isocenter", isocenter,
+                 "with --dicom-a/b: A's isocentre X Y Z, patient mm (default 0: --tree points "
+                 "relative to it)")
+      ->expected(3);
   app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)");
   app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)");
   app.add_option("--system", system_name,
@@ -420,6 +425,8 @@ int main(int argc, char** argv) {
       };
       gimm::XaFrame fa = read(dicom_a, frame_a), fb = read(dicom_b, frame_b);
       gimm::set_table_reference(fb, fa);
+      if (!isocenter.empty())
+        fa.carm.isocenter = fb.carm.isocenter = {isocenter[0], isocenter[1], isocenter[2]};
       std::optional<gimm::CoronarySystem> system;
       if (!system_name.empty()) system = gimm::parse_coronary_system(system_name);
       for (auto* f : {&fa, &fb}) {
@@ -449,8 +456,8 @@ int main(int argc, char** argv) {
     } else {
       GIMM_CHECK(!image_a.empty() && !image_b.empty(),
                  "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
-      GIMM_CHECK(frame_a < 0 && frame_b < 0 && system_name.empty(),
-                 "--frame-a/b and --system go with --dicom-a/b");
+      GIMM_CHECK(frame_a < 0 && frame_b < 0 && system_name.empty() && isocenter.empty(),
+                 "--frame-a/b, --system and --isocenter go with --dicom-a/b");
       loaded_pair = {gimm::read_png_unit(image_a), gimm::read_png_unit(image_b),
                      read_camera(camera_a), read_camera(camera_b)};
     }

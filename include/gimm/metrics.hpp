@@ -3,4 +3,6 @@
 /// curves and dataset summaries (scoring only).
 #include "gimm/metrics/protocol.hpp"
 #include "gimm/metrics/summary.hpp"
+#include "gimm/metrics/tree_error.hpp"
 #include "gimm/metrics/truth.hpp"
+#include "gimm/metrics/user_truth.hpp"

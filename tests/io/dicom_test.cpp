@@ -92,10 +92,9 @@ void write_spec(const fs::path& path, const Spec& spec) {
   auto tags = spec.tags;
   tags[{0x0008, 0x0060}] = {gdcm::VR::CS, spec.modality};
   tags[{0x0008, 0x0016}] = {
-      gdcm::VR::UI,
-      gdcm::MediaStorage::GetMSString(spec.modality == "CT"
-                                          ? gdcm::MediaStorage::CTImageStorage
-                                          : gdcm::MediaStorage::XRayAngiographicImageStorage)};
+      gdcm::VR::UI, gdcm::MediaStorage::GetMSString(
+                        spec.modality == "CT" ? gdcm::MediaStorage::CTImageStorage
+                                              : gdcm::MediaStorage::XRayAngiographicImageStorage)};
   for (const auto& [key, vr_value] : tags) {
     std::string value = vr_value.second;
     if (value.size() % 2) value += vr_value.first == gdcm::VR::UI ? '\0' : ' ';
@@ -292,8 +291,8 @@ TEST_CASE("DICOM: frames, bit depths, MONOCHROME1 and compressed syntaxes", "[io
       const gimm::XaFrame got = gimm::read_xa_dicom(path.string());
       INFO(gdcm::TransferSyntax::GetTSString(syntax));
       REQUIRE(got.image.rows() == expected.image.rows());
-      CHECK(std::equal(got.image.data(), got.image.data() + got.image.size(),
-                       expected.image.data()));
+      CHECK(
+          std::equal(got.image.data(), got.image.data() + got.image.size(), expected.image.data()));
     }
   }
 }

@@ -119,7 +119,8 @@ inline PairScore score_pair(const PairTruth& truth, const PairMatches& matches,
     r.index = i;
     r.ab = score_direction(a, b, la, lb, world, truth.mask_a.get());
     r.ba = score_direction(b, a, lb, la, world, truth.mask_b.get());
-    r.epipolar_px = std::sqrt(symmetric_epipolar_distance_sq<double>(truth.F, a, b));
+    if (!truth.F.isZero())  // a user's truth may come without F
+      r.epipolar_px = std::sqrt(symmetric_epipolar_distance_sq<double>(truth.F, a, b));
     out.ranked.push_back(r);
   }
   return out;

@@ -91,7 +91,7 @@ class SummaryBuilder {
       for (const DirectionScore* d : {&m.ab, &m.ba})
         if (d->scored) {
           px_.push_back(d->error_px);
-          mm_.push_back(d->error_mm);
+          if (!std::isnan(d->error_mm)) mm_.push_back(d->error_mm);  // NaN: truth without 3D
         }
       if (!std::isnan(m.epipolar_px)) epi_.push_back(m.epipolar_px);
     }
