@@ -374,6 +374,7 @@ int main(int argc, char** argv) {
     const auto load_network = [&] {
       if (weights.empty()) weights = gimm::cli::default_weights();
       gimm::nn::Matcher network = gimm::nn::load_matcher(weights);
+      GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
       options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
       return network;
     };

@@ -24,10 +24,12 @@ T = lambda name: os.path.join(TMP, name)
 
 run("gimm-phantom", "--seed", 7, "--out", T("p"))
 common = ["--volume", T("p/7.img.nii.gz"), "--label", T("p/7.label.nii.gz"), "--system", "LCA",
-          "--rows", 256, "--cols", 224, "--pixel", 1.0, "--dicom", "--quiet"]
-run("gimm-drr", *common, "--primary", 45, "--secondary", 22, "--out", T("a"))
-run("gimm-drr", *common, "--primary", -30, "--secondary", 22, "--table", 6, -12, 25, "--out",
-    T("b"))
+          "--pixel", 1.0, "--dicom", "--quiet"]
+# Two sizes, as two runs of a real study may have.
+run("gimm-drr", *common, "--rows", 256, "--cols", 224, "--primary", 45, "--secondary", 22,
+    "--out", T("a"))
+run("gimm-drr", *common, "--rows", 240, "--cols", 256, "--primary", -30, "--secondary", 22,
+    "--table", 6, -12, 25, "--out", T("b"))
 cam = {v: json.load(open(T(v + ".camera.json"))) for v in "ab"}
 iso = cam["a"]["isocenter"]
 

@@ -74,8 +74,8 @@ with open(other, "w") as f:
 cases = [
     ("no cameras", ["--method", "geometric", "--image-a", A, "--image-b", B], "--camera-a"),
     ("camera size", [*pair[:-2], "--camera-b", other], "128 x 128"),
-    ("tree for learned", ["--image-a", A, "--image-b", B, "--tree", os.path.join(TMP, "t.json")],
-     "--method geometric"),
+    ("tree without cameras", ["--image-a", A, "--image-b", B, "--tree",
+                              os.path.join(TMP, "t.json")], "give --camera-a/b"),
 ]
 for name, args, needle in cases:
     out = os.path.join(TMP, f"bad_{name.replace(' ', '_')}.json")

@@ -117,7 +117,6 @@ with open(WEIGHTS, "rb") as f:
 with open(truncated, "wb") as f:
     f.write(data[: len(data) // 2])
 cases = [
-    ("sizes", ["--image-a", A, "--image-b", os.path.join(TMP, "c.png"), "--weights", WEIGHTS], "156x120"),
     ("png", ["--image-a", A, "--image-b", bad_png, "--weights", WEIGHTS], "bad.png"),
     ("weights", ["--image-a", A, "--image-b", B, "--weights", truncated], "truncated.safetensors"),
     ("class", [*base[:6], "--class-a", 12], "view class 12"),
@@ -131,6 +130,18 @@ for name, args, needle in cases:
     p = run("gimm-match", *args, "--out", out, ok=False)
     check(needle in p.stderr and p.stderr.startswith("error:"), f"{name}: message {p.stderr.strip()!r} lacks {needle!r}")
     check(not os.path.exists(out), f"{name}: an output file was left behind")
+
+# Images of different sizes (two runs of a study often differ): each maps back to its own size.
+sizes_out = os.path.join(TMP, "sizes.json")
+run("gimm-match", "--image-a", A, "--image-b", os.path.join(TMP, "c.png"), "--weights", WEIGHTS,
+    "--gate", "none", "--out", sizes_out)
+if os.path.exists(sizes_out):
+    with open(sizes_out) as f:
+        m = json.load(f)
+    check(len(m["points_a"]) > 0, "different sizes: no matches")
+    check(all(-0.5 <= u <= 155.5 and -0.5 <= v <= 131.5 for u, v in m["points_a"]) and
+          all(-0.5 <= u <= 155.5 and -0.5 <= v <= 119.5 for u, v in m["points_b"]),
+          "different sizes: a point is off its own image")
 
 # A whole dataset: every pair gets a predictions file and gimm-eval scores them.
 ds, pred = os.path.join(TMP, "ds"), os.path.join(TMP, "pred")

@@ -45,6 +45,7 @@ struct Spec {
 };
 
 void write_spec(const fs::path& path, const Spec& spec) {
+  gimm::detail::quiet_gdcm();  // GDCM would print its notes on files it is asked to write
   // The image lives in the writer: GDCM's smart pointers would free an image on the stack.
   gdcm::ImageWriter writer;
   gdcm::Image& image = writer.GetImage();
@@ -218,6 +219,15 @@ TEST_CASE("DICOM: the table's change moves the isocentre to +x, +y, +z (HFS)", "
   // Feet first: lateral and longitudinal turn round, vertical does not.
   fb.carm.patient_position = gimm::PatientPosition::FFS;
   CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(7, 10, -30));
+
+  // Implicit VR, as GE writes them: the private tags come back without a VR (UN), their bytes
+  // the decimal strings.
+  Spec implicit = b;
+  implicit.syntax = gdcm::TransferSyntax::ImplicitVRLittleEndian;
+  write_spec(tmp("table_implicit.dcm"), implicit);
+  const gimm::XaFrame fi = gimm::read_xa_dicom(tmp("table_implicit.dcm").string());
+  CHECK(fi.table_source == "GE private (0019,1021-1023)");
+  CHECK(fi.carm.table_mm == Eigen::Vector3d(-2, 110, -170));
 
   // Without GE's private creator the (0019,10xx) values mean something else: not read.
   Spec other = a;

@@ -5,6 +5,7 @@ execute_process(COMMAND ${CMAKE_COMMAND} -S ${GIMM_SOURCE}/tests/package/subdire
   -DGIMM_SOURCE=${GIMM_SOURCE} -DCMAKE_BUILD_TYPE=Release
   -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_ZLIB=ON
   -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON -DCMAKE_DISABLE_FIND_PACKAGE_embree=ON
+  -DCMAKE_DISABLE_FIND_PACKAGE_GDCM=ON
   RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "configuring gimm by add_subdirectory without io and Embree failed")

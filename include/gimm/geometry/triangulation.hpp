@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SVD>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <vector>
 

@@ -168,19 +168,20 @@ class TagReader {
   std::vector<DicomTagUse> uses;
 
  private:
-  /// Text of an element. Private tags of an implicit-VR file have no VR (UN): their bytes are
-  /// taken as text when they look like a decimal string, else as a little-endian 4-byte integer
-  /// or 8-byte double.
+  /// Text of an element. Public tags go through GDCM's string filter, which knows their VR
+  /// from the dictionary (an implicit-VR file stores none). Private tags of an implicit-VR
+  /// file have no VR: their bytes are taken as text when printable, else as a little-endian
+  /// 4-byte integer or 8-byte double.
   std::string element_text(const gdcm::DataElement& de) const {
     const gdcm::VR vr = de.GetVR();
-    if (vr != gdcm::VR::UN && vr != gdcm::VR::INVALID) return filter_.ToString(de.GetTag());
+    const bool known_vr = vr != gdcm::VR::UN && vr != gdcm::VR::INVALID;
+    if (known_vr || !de.GetTag().IsPrivate()) return filter_.ToString(de.GetTag());
     const gdcm::ByteValue* bytes = de.GetByteValue();
     if (!bytes) return {};
     const std::string raw(bytes->GetPointer(), bytes->GetLength());
-    const bool decimal = std::all_of(raw.begin(), raw.end(), [](char c) {
-      return std::isdigit(static_cast<unsigned char>(c)) || std::strchr("+-.eE \\", c) || c == '\0';
-    });
-    if (decimal) return std::string(raw.c_str());
+    const bool printable = std::all_of(raw.begin(), raw.end(),
+                                       [](char c) { return (c >= 0x20 && c < 0x7f) || c == '\0'; });
+    if (printable) return std::string(raw.c_str());
     if (raw.size() == 4) {
       std::int32_t v;
       std::memcpy(&v, raw.data(), 4);

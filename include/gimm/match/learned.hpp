@@ -79,7 +79,7 @@ inline NetworkInput to_network_input(const Image<float>& image, int input_size,
                                      const std::string& name, std::int64_t pad_rows = 0,
                                      std::int64_t pad_cols = 0) {
   GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
-  GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
+  GIMM_CHECK(input_size >= 0, "input_size must be >= 0, got " << input_size);
   NetworkInput in;
   Image<float> content = image;
   if (input_size > 0) {

@@ -30,9 +30,9 @@ namespace gimm {
 
 constexpr const char* kTruthFormat = "gimm-truth/1";
 
-namespace detail {
-/// The discs of `radius` px around `points`, on an image just large enough to hold them.
-inline std::shared_ptr<const Image<std::uint8_t>> disc_mask(
+/// Sparse truth's stand-in for a vessel mask: the discs of `radius` px around `points`, on an
+/// image just large enough to hold them (for truth built in memory, as read_user_truth does).
+inline std::shared_ptr<const Image<std::uint8_t>> sparse_truth_mask(
     const std::vector<Eigen::Vector2d>& points, double radius) {
   double max_u = 0, max_v = 0;
   for (const auto& p : points) {
@@ -52,7 +52,6 @@ inline std::shared_ptr<const Image<std::uint8_t>> disc_mask(
       }
   return mask;
 }
-}  // namespace detail
 
 inline PairTruth read_user_truth(const std::filesystem::path& path, double radius_px) {
   GIMM_CHECK(std::isfinite(radius_px) && radius_px > 0,
@@ -105,8 +104,8 @@ inline PairTruth read_user_truth(const std::filesystem::path& path, double radiu
     t.dense.push_back(c);
   }
   if (j.contains("F")) t.F = matrix_from_json<3, 3>(j, "F", where);
-  t.mask_a = detail::disc_mask(a, radius_px);
-  t.mask_b = detail::disc_mask(b, radius_px);
+  t.mask_a = sparse_truth_mask(a, radius_px);
+  t.mask_b = sparse_truth_mask(b, radius_px);
   return t;
 }
 
