@@ -1,0 +1,74 @@
+"""Builds the Python module gimm (gimm._gimm from python/src, the package python/gimm) with
+setuptools and Debian's pybind11, without a network and without CMake (docs/python.md):
+
+    /usr/bin/python3 -m pip wheel --no-build-isolation --no-deps -w dist python/
+    /usr/bin/python3 -m pip install --no-build-isolation python/
+
+The headers come from this source tree (../include); Eigen from EIGEN3_INCLUDE_DIR (default
+/usr/include/eigen3), GLM, nlohmann_json, libpng and zlib from the system, OpenMP from GCC. The
+shipped matcher weights go into the wheel (gimm/weights/). GIMM_BUILD_JOBS compiles that many
+sources at once (default 1). CMake's build (python/CMakeLists.txt) is the other way to build it.
+"""
+import os
+import pathlib
+import re
+import shutil
+
+from pybind11.setup_helpers import ParallelCompile, Pybind11Extension, build_ext
+from setuptools import setup
+from setuptools.command.build_py import build_py
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parent
+WEIGHTS = ROOT / "weights" / "gimm-phantom-128.safetensors"
+VERSION = re.search(r"project\(gimm VERSION ([0-9.]+)",
+                    (ROOT / "CMakeLists.txt").read_text()).group(1)
+
+
+def generated_include():
+    """include/gimm/version.hpp as CMake makes it from cmake/version.hpp.in."""
+    major, minor, patch = VERSION.split(".")
+    text = (ROOT / "cmake" / "version.hpp.in").read_text()
+    for key, value in (("PROJECT_VERSION_MAJOR", major), ("PROJECT_VERSION_MINOR", minor),
+                       ("PROJECT_VERSION_PATCH", patch), ("PROJECT_VERSION", VERSION)):
+        text = text.replace(f"@{key}@", value)
+    out = HERE / "build" / "generated"
+    (out / "gimm").mkdir(parents=True, exist_ok=True)
+    header = out / "gimm" / "version.hpp"
+    if not header.exists() or header.read_text() != text:
+        header.write_text(text)
+    return str(out)
+
+
+class build_py_with_weights(build_py):
+    """Copies the shipped matcher weights into the package (Matcher() finds them there)."""
+
+    def run(self):
+        super().run()
+        target = pathlib.Path(self.build_lib) / "gimm" / "weights"
+        target.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(WEIGHTS, target / WEIGHTS.name)
+
+
+ParallelCompile("GIMM_BUILD_JOBS", default=1).install()
+
+module = Pybind11Extension(
+    "gimm._gimm",
+    sorted(str(p.relative_to(HERE)) for p in (HERE / "src").glob("*.cpp")),
+    include_dirs=[str(ROOT / "include"), generated_include(),
+                  os.environ.get("EIGEN3_INCLUDE_DIR", "/usr/include/eigen3")],
+    define_macros=[("EIGEN_DONT_PARALLELIZE", None), ("NDEBUG", None)],
+    extra_compile_args=["-fopenmp", "-O3"],
+    extra_link_args=["-fopenmp"],
+    libraries=["png", "z"],
+    cxx_std=17,
+)
+
+setup(
+    version=VERSION,
+    packages=["gimm"],
+    package_data={"gimm": ["_gimm.pyi", "py.typed"]},
+    ext_modules=[module],
+    cmdclass={"build_ext": build_ext, "build_py": build_py_with_weights},
+    zip_safe=False,
+)

@@ -1,0 +1,325 @@
+// gimm.Matcher (the learned matcher, match/learned.hpp) and the evaluation protocol
+// (metrics/protocol.hpp, summary.hpp, user_truth.hpp).
+#include <pybind11/stl.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "common.hpp"
+#include "gimm/match/learned.hpp"
+#include "gimm/match/matches.hpp"
+#include "gimm/metrics/protocol.hpp"
+#include "gimm/metrics/summary.hpp"
+#include "gimm/metrics/user_truth.hpp"
+#include "gimm/nn/matcher_file.hpp"
+
+namespace gimm::python {
+
+namespace {
+
+constexpr const char* kShippedWeights = "gimm-phantom-128.safetensors";
+
+/// The shipped weights: $GIMM_WEIGHTS; beside the package (a wheel's gimm/weights/); an
+/// install tree's share/gimm/weights above the package; the source tree it was built from.
+std::string default_weights() {
+  namespace fs = std::filesystem;
+  const py::module_ self = py::module_::import("gimm._gimm");
+  std::vector<fs::path> candidates;
+  if (const char* env = std::getenv("GIMM_WEIGHTS")) candidates.emplace_back(env);
+  const fs::path package = fs::path(self.attr("__file__").cast<std::string>()).parent_path();
+  candidates.push_back(package / "weights" / kShippedWeights);
+  for (fs::path dir = package; dir.has_parent_path() && dir != dir.parent_path();
+       dir = dir.parent_path())
+    if (fs::is_directory(dir / "share" / "gimm" / "weights")) {
+      candidates.push_back(dir / "share" / "gimm" / "weights" / kShippedWeights);
+      break;
+    }
+#ifdef GIMM_SOURCE_WEIGHTS_DIR
+  candidates.push_back(fs::path(GIMM_SOURCE_WEIGHTS_DIR) / kShippedWeights);
+#endif
+  std::string tried;
+  for (const auto& p : candidates) {
+    if (fs::is_regular_file(p)) return p.string();
+    tried += " '" + p.string() + "'";
+  }
+  throw IoError("gimm: no weights given and the shipped weights are not at" + tried +
+                " (set GIMM_WEIGHTS)");
+}
+
+py::object parse_json(const nlohmann::json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+std::vector<Eigen::Vector2d> point_list(const py::handle& obj, const std::string& name) {
+  const auto m = rows_of(obj, 2, name);
+  std::vector<Eigen::Vector2d> out;
+  for (Eigen::Index n = 0; n < m.rows(); ++n) out.emplace_back(m(n, 0), m(n, 1));
+  return out;
+}
+
+py::object item(const py::dict& d, const char* key) {
+  return d.contains(key) ? py::object(d[key]) : py::object(py::none());
+}
+
+py::dict as_dict(const py::handle& obj, const std::string& name) {
+  if (!py::isinstance<py::dict>(obj))
+    throw py::type_error(name + ": expected a dict, got " +
+                         std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  return py::reinterpret_borrow<py::dict>(obj);
+}
+
+PairTruth truth_from(const py::handle& obj, double radius_px, const std::string& name) {
+  const py::dict d = as_dict(obj, name);
+  for (const char* key : {"points_a", "points_b"})
+    if (!d.contains(key)) throw py::value_error(name + ": missing '" + key + "' (N, 2)");
+  PairTruth t;
+  t.id = d.contains("id") ? d["id"].cast<std::string>() : name;
+  if (d.contains("view_class_a")) t.view_class_a = d["view_class_a"].cast<int>();
+  if (d.contains("view_class_b")) t.view_class_b = d["view_class_b"].cast<int>();
+  const auto a = point_list(d["points_a"], name + "['points_a']");
+  const auto b = point_list(d["points_b"], name + "['points_b']");
+  if (a.size() != b.size())
+    throw py::value_error(name + ": points_a has " + std::to_string(a.size()) +
+                          " points but points_b " + std::to_string(b.size()));
+  const py::object world = item(d, "world_mm");
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> w;
+  if (!world.is_none()) {
+    w = rows_of(world, 3, name + "['world_mm']");
+    if (static_cast<std::size_t>(w.rows()) != a.size())
+      throw py::value_error(name + ": world_mm has " + std::to_string(w.rows()) + " rows for " +
+                            std::to_string(a.size()) + " points");
+  }
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    Correspondence c;
+    c.a = a[k];
+    c.b = b[k];
+    c.world = world.is_none() ? Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN())
+                              : Eigen::Vector3d(w.row(static_cast<Eigen::Index>(k)).transpose());
+    t.dense.push_back(c);
+  }
+  if (const py::object F = item(d, "F"); !F.is_none()) t.F = fixed<3, 3>(F, name + "['F']");
+  const auto mask = [&](const char* key, const std::vector<Eigen::Vector2d>& points) {
+    const py::object m = item(d, key);
+    if (m.is_none()) return sparse_truth_mask(points, radius_px);
+    return std::shared_ptr<const Image<std::uint8_t>>(std::make_shared<Image<std::uint8_t>>(
+        image_from<std::uint8_t>(m, Accept::mask, name + "['" + key + "']")));
+  };
+  t.mask_a = mask("mask_a", a);
+  t.mask_b = mask("mask_b", b);
+  return t;
+}
+
+PairMatches matches_from(const py::handle& obj, const std::string& name) {
+  const py::dict d = as_dict(obj, name);
+  for (const char* key : {"points_a", "points_b"})
+    if (!d.contains(key)) throw py::value_error(name + ": missing '" + key + "' (N, 2)");
+  PairMatches m;
+  m.points_a = point_list(d["points_a"], name + "['points_a']");
+  m.points_b = point_list(d["points_b"], name + "['points_b']");
+  if (const py::object c = item(d, "confidence"); !c.is_none()) {
+    const Eigen::VectorXd v = vector_of(c, name + "['confidence']");
+    m.confidence.assign(v.data(), v.data() + v.size());
+  } else {
+    m.confidence.assign(m.points_a.size(), 1.0);
+  }
+  if (const py::object F = item(d, "F"); !F.is_none()) m.F = fixed<3, 3>(F, name + "['F']");
+  if (const py::object s = item(d, "F_source"); !s.is_none()) m.F_source = s.cast<std::string>();
+  if (const py::object p = item(d, "pair"); !p.is_none()) m.pair = p.cast<std::string>();
+  return m;
+}
+
+py::dict matches_dict(PairMatches m) {
+  py::dict d;
+  d["points_a"] = rows_to_numpy<2>(m.points_a);
+  d["points_b"] = rows_to_numpy<2>(m.points_b);
+  d["confidence"] = adopt_vector(std::move(m.confidence));
+  d["F"] = m.F ? py::object(to_numpy(*m.F)) : py::object(py::none());
+  d["F_source"] = m.F_source;
+  d["pair"] = m.pair;
+  return d;
+}
+
+/// A list of dicts, or one dict as a list of one.
+std::vector<py::object> list_of(const py::handle& obj) {
+  std::vector<py::object> out;
+  if (py::isinstance<py::dict>(obj) || obj.is_none()) {
+    out.push_back(py::reinterpret_borrow<py::object>(obj));
+    return out;
+  }
+  for (const py::handle& h : py::reinterpret_borrow<py::sequence>(obj))
+    out.push_back(py::reinterpret_borrow<py::object>(h));
+  return out;
+}
+
+}  // namespace
+
+void bind_match(py::module_& m) {
+  py::class_<nn::Matcher>(m, "Matcher", R"doc(
+The GIMM learned matcher on gimm's CPU inference engine (match/learned.hpp, docs/matcher.md).
+
+Matcher(weights=None): weights is a .safetensors file written by tools/train (gimm-matcher);
+None: the shipped weights (weights/gimm-phantom-128.safetensors, trained on phantoms only),
+looked for at $GIMM_WEIGHTS, in the package, in an install tree's share/gimm/weights and in the
+source tree the module was built from. Raises gimm.IoError / gimm.FormatError naming the file.)doc")
+      .def(py::init([](const py::object& weights) {
+             const std::string path =
+                 weights.is_none() ? default_weights() : py::str(weights).cast<std::string>();
+             py::gil_scoped_release release;
+             return std::make_unique<nn::Matcher>(nn::load_matcher(path));
+           }),
+           py::arg("weights") = py::none())
+      .def_property_readonly(
+          "input_size", [](const nn::Matcher& n) { return n.config().input_size; },
+          "The longer image side (px) the weights were trained at; 0: not recorded")
+      .def(
+          "match",
+          [](const nn::Matcher& net, const py::handle& image_a, const py::handle& image_b,
+             int class_a, int class_b, const py::object& camera_a, const py::object& camera_b,
+             const std::string& gate, double tau, double delta_px, int top_k, int min_matches,
+             const py::object& input_size, bool snap_to_epipolar) {
+            const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
+            const Image<float> b = image_from<float>(image_b, Accept::floating, "image_b");
+            std::optional<Camerad> ca, cb;
+            if (!camera_a.is_none()) ca = camera_of(camera_a, "camera_a");
+            if (!camera_b.is_none()) cb = camera_of(camera_b, "camera_b");
+            MatchOptions o;
+            o.gate.mode = parse_gate_mode(gate);
+            o.gate.tau = tau;
+            o.gate.delta_px = delta_px;
+            o.gate.top_k = top_k;
+            o.gate.min_matches = min_matches;
+            o.input_size = input_size.is_none() ? net.config().input_size : input_size.cast<int>();
+            o.snap_to_epipolar = snap_to_epipolar;
+            PairMatchResult r;
+            {
+              py::gil_scoped_release release;
+              r = match_pair(net, a, b, class_a, class_b, ca, cb, o);
+            }
+            r.matches.F = r.F;
+            r.matches.F_source = r.F ? r.fundamental_source : "none";
+            py::dict d = matches_dict(std::move(r.matches));
+            d.attr("pop")("pair");
+            d["network_matches"] = r.network_matches;
+            d["dropped_in_padding"] = r.dropped_in_padding;
+            d["dropped_by_gate"] = r.dropped_by_gate;
+            return d;
+          },
+          py::arg("image_a"), py::arg("image_b"), py::arg("class_a") = 0, py::arg("class_b") = 0,
+          py::arg("camera_a") = py::none(), py::arg("camera_b") = py::none(), py::kw_only(),
+          py::arg("gate") = "hard", py::arg("tau") = 2.0, py::arg("delta_px") = 2.0,
+          py::arg("top_k") = 256, py::arg("min_matches") = 32, py::arg("input_size") = py::none(),
+          py::arg("snap_to_epipolar") = false, R"doc(
+Matches coronary points between two angiograms, as gimm-match does for one pair.
+
+image_a, image_b: float (rows, cols) in [0, 1], bright background and dark vessels (render()'s
+'intensity', or read_png); sizes may differ. class_a, class_b: view classes 1..11 (0 unknown;
+view_class_from_angles). camera_a, camera_b: both or neither (Camera or CArm); with them the gate
+uses their exact F, without it F is estimated from the matches (gate_reference). gate: 'hard'
+(drops matches farther than delta_px from their epipolar lines), 'soft', 'logit' (rescale by
+tau), 'none'. input_size: the longer side the images are resized to, None: the weights'
+(gimm-match's default), 0: the images' own size.
+Returns dict(points_a, points_b (N, 2) pixels (u, v) with centres at integers, confidence (N,),
+F (3, 3) with x_b^T F x_a = 0 or None, F_source 'cameras' | 'matches' | 'none',
+network_matches, dropped_in_padding, dropped_by_gate). The images are copied into gimm's
+storage; the GIL is released while matching.)doc");
+
+  m.def(
+      "evaluate",
+      [](const py::handle& truth, const py::handle& predictions, long top_k, double radius_px) {
+        if (!(std::isfinite(radius_px) && radius_px > 0))
+          throw py::value_error("evaluate: radius_px must be > 0, got " +
+                                std::to_string(radius_px));
+        if (top_k < 0) throw py::value_error("evaluate: top_k must be >= 0 (0 = all)");
+        const auto truths = list_of(truth), preds = list_of(predictions);
+        if (truths.size() != preds.size())
+          throw py::value_error("evaluate: " + std::to_string(truths.size()) + " truths but " +
+                                std::to_string(preds.size()) + " predictions");
+        std::vector<PairScore> pairs;
+        for (std::size_t n = 0; n < truths.size(); ++n) {
+          const std::string name =
+              truths.size() == 1 ? "truth" : "truth[" + std::to_string(n) + "]";
+          const PairTruth t = truth_from(truths[n], radius_px, name);
+          if (preds[n].is_none()) {
+            pairs.push_back(missing_pair(t));
+            continue;
+          }
+          const PairMatches p =
+              matches_from(preds[n], truths.size() == 1 ? "predictions"
+                                                        : "predictions[" + std::to_string(n) + "]");
+          pairs.push_back(score_pair(t, p));
+        }
+        nlohmann::json per_pair = nlohmann::json::array();
+        for (const auto& p : pairs) {
+          SummaryBuilder b(top_k);
+          b.add(p);
+          nlohmann::json j = to_json(b.summary());
+          j["pair"] = p.id;
+          per_pair.push_back(j);
+        }
+        const nlohmann::json out = {
+            {"top_k", top_k}, {"pooled", to_json(summarize(pairs, top_k))}, {"pairs", per_pair}};
+        return parse_json(out);
+      },
+      py::arg("truth"), py::arg("predictions"), py::arg("top_k") = 20, py::arg("radius_px") = 3.0,
+      R"doc(
+Scores predicted matches with the paper's protocol (docs/evaluation.md), as gimm-eval does.
+
+truth: a dict, or a list of dicts (one per pair), with points_a, points_b (N, 2) pixels (point i
+of A <-> point i of B), optional world_mm (N, 3) (enables the 3D error), F (3, 3) (the epipolar
+check), mask_a / mask_b (rows, cols) vessel masks (nonzero = vessel; without them, the discs of
+radius_px around the truth points, as gimm-eval --truth), view_class_a / view_class_b, id.
+label_pair's output is such a dict. predictions: a dict (or list, None for a pair without
+predictions) with points_a, points_b (M, 2), optional confidence (M,) (all 1 when missing) -
+Matcher.match's output is one. top_k: the most confident matches kept per pair (0 = all).
+Returns dict(top_k, pooled, pairs): pooled and per-pair summaries with the keys of gimm-eval's
+summary.json (prec_1px, prec_3px, prec_5px, mean_px, median_px, p90_px, mean_mm, ...,
+coverage, epipolar_*); undefined figures are None.)doc");
+  m.def(
+      "read_user_truth",
+      [](const std::filesystem::path& path, double radius_px) {
+        const PairTruth t = read_user_truth(path, radius_px);
+        std::vector<Eigen::Vector2d> a, b;
+        std::vector<Eigen::Vector3d> w;
+        for (const auto& c : t.dense) {
+          a.push_back(c.a);
+          b.push_back(c.b);
+          w.push_back(c.world);
+        }
+        py::dict d;
+        d["id"] = t.id;
+        d["points_a"] = rows_to_numpy<2>(a);
+        d["points_b"] = rows_to_numpy<2>(b);
+        d["world_mm"] = rows_to_numpy<3>(w);
+        d["F"] = t.F.isZero() ? py::object(py::none()) : py::object(to_numpy(t.F));
+        d["mask_a"] = adopt_image(Image<std::uint8_t>(*t.mask_a));
+        d["mask_b"] = adopt_image(Image<std::uint8_t>(*t.mask_b));
+        return d;
+      },
+      py::arg("path"), py::arg("radius_px") = 3.0,
+      "Reads a gimm-truth/1 file (docs/evaluation.md) as a truth dict for evaluate: points_a, "
+      "points_b, world_mm (NaN rows when absent), F or None, and the disc masks of radius_px.");
+  m.def(
+      "read_matches",
+      [](const std::filesystem::path& path) {
+        return matches_dict(matches_from_json(read_json_file(path), path.string()));
+      },
+      py::arg("path"),
+      "Reads a gimm-matches/1 predictions file: dict(points_a, points_b (N, 2), confidence (N,), "
+      "F or None, F_source, pair).");
+  m.def(
+      "write_matches",
+      [](const std::filesystem::path& path, const py::handle& predictions, const py::object& pair) {
+        PairMatches p = matches_from(predictions, "predictions");
+        if (!pair.is_none()) p.pair = pair.cast<std::string>();
+        if (p.F_source == "none") {
+          p.F.reset();
+          p.F_source.clear();
+        }
+        write_matches(path, p);
+      },
+      py::arg("path"), py::arg("predictions"), py::arg("pair") = py::none(),
+      "Writes predictions (a dict as Matcher.match returns) as a gimm-matches/1 file for "
+      "gimm-eval, atomically.");
+}
+
+}  // namespace gimm::python

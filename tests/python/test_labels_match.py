@@ -1,0 +1,232 @@
+"""Anatomy, labels, the learned matcher and the evaluation from Python, against gimm-match and
+gimm-eval where they are built."""
+import json
+import unittest
+
+import numpy as np
+
+import gimm
+from common import carm, cli, is_capsule_view, lca, phantom, renderer, run, tmp_path
+
+VIEW_A, VIEW_B = (40.0, 20.0), (-30.0, 20.0)  # LCA: LAO cranial (class 8), RAO cranial (10)
+
+
+class Anatomy(unittest.TestCase):
+    def test_phantom_centerlines_as_arrays(self):
+        p = phantom()
+        for system in ("LCA", "RCA"):
+            c = p["centerlines"][system]
+            n = len(c["points"])
+            self.assertGreater(n, 50)
+            self.assertEqual(c["points"].shape, (n, 3))
+            for key in ("radius", "branch", "index"):
+                self.assertEqual(c[key].shape, (n,), key)
+            self.assertEqual(c["branch"].dtype, np.int32)
+            self.assertTrue((c["radius"] > 0).all())
+            self.assertEqual(len(c["branch_names"]), len(c["branch_parents"]))
+            self.assertEqual({c["branch_systems"][b] for b in c["branch"]}, {system})
+        names = p["centerlines"]["LCA"]["branch_names"]
+        self.assertIn("LAD", names)
+        split = gimm.split_coronary_systems(p["label"], p["geometry"])
+        self.assertEqual(split["lca_voxels"], int(split["lca"].sum()))
+        self.assertEqual(split["lca_voxels"] + split["rca_voxels"] + split["dropped_voxels"],
+                         int(p["label"].sum()))
+        # LPS: the left tree lies further to the patient's left (+x) than the right one.
+        lx = p["centerlines"]["LCA"]["points"][:, 0].mean()
+        rx = p["centerlines"]["RCA"]["points"][:, 0].mean()
+        self.assertGreater(lx, rx)
+
+    def test_extracted_centerlines_follow_the_analytic_ones(self):
+        p = phantom()
+        extracted = gimm.extract_centerlines(lca(), p["geometry"], system="LCA")
+        truth = p["centerlines"]["LCA"]["points"]
+        d = np.linalg.norm(extracted["points"][:, None, :] - truth[None, :, :], axis=2).min(axis=1)
+        self.assertLess(np.median(d), 2.0)  # mm, on a 1.6 x 1.6 x 2 mm grid
+
+    def test_view_protocol(self):
+        views = gimm.routine_views()
+        self.assertEqual([v["id"] for v in views], list(range(1, 12)))
+        self.assertEqual(gimm.view_class_from_angles(*VIEW_A, system="LCA"), (8, 0.0))
+        self.assertEqual(gimm.view_class_from_angles(*VIEW_B, system="LCA"), (10, 0.0))
+        self.assertEqual(gimm.view_class_from_angles(0, 0)[0], 5)
+        self.assertGreater(gimm.view_class_from_angles(90, 0)[1], 20)
+        primary, secondary = gimm.sample_view(8, seed=3)
+        self.assertTrue(25 <= primary <= 65 and 10 <= secondary <= 35)
+        self.assertEqual(gimm.sample_view(8, seed=3), (primary, secondary))
+        with self.assertRaisesRegex(gimm.Error, "view class id must be in 1..11, got 12"):
+            gimm.sample_view(12)
+        with self.assertRaisesRegex(gimm.Error, "LCA"):
+            gimm.view_class_from_angles(0, 0, system="LAD")
+
+
+class Labels(unittest.TestCase):
+    def test_label_view_projects_with_the_camera(self):
+        points = phantom()["centerlines"]["LCA"]
+        camera = carm(*VIEW_A).camera()
+        view = renderer().render(camera)
+        labels = gimm.label_view(points, camera, view["vessel_mask"], renderer=renderer())
+        uv, depth = camera.project(points["points"])
+        np.testing.assert_array_equal(labels["uv"], uv)
+        np.testing.assert_array_equal(labels["depth"], depth)
+        self.assertTrue(labels["in_image"].all())
+        self.assertGreater(labels["on_mask"].mean(), 0.8)
+        np.testing.assert_array_equal(labels["valid"],
+                                      labels["in_front"] & labels["in_image"] & labels["on_mask"])
+        self.assertGreater(labels["visible"].mean(), 0.5)
+        plain = gimm.label_view(points["points"], camera)  # (N, 3) points, no mask
+        self.assertTrue(plain["on_mask"].all() and plain["visible"].all())
+
+    def test_label_pair_is_consistent_with_F(self):
+        points = phantom()["centerlines"]["LCA"]
+        a, b = carm(*VIEW_A), carm(*VIEW_B)
+        ma = renderer().render(a)["vessel_mask"]
+        mb = renderer().render(b)["vessel_mask"]
+        pair = gimm.label_pair(points, a, b, ma, mb, sparse_count=20, seed=1)
+        m = len(pair["points_a"])
+        self.assertGreater(m, 100)
+        self.assertLess(gimm.symmetric_epipolar_distance_sq(pair["F"], pair["points_a"],
+                                                            pair["points_b"]).max(), 1e-12)
+        np.testing.assert_allclose(a.camera().project(pair["world_mm"])[0], pair["points_a"])
+        self.assertEqual(len(set(pair["sparse"].tolist())), 20)
+        self.assertLess(pair["sparse"].max(), m)
+        self.assertIs(pair["mask_a"], ma)
+        # Exact predictions score perfectly under the protocol.
+        exact = {"points_a": pair["points_a"], "points_b": pair["points_b"]}
+        pooled = gimm.evaluate(pair, exact, top_k=0)["pooled"]
+        self.assertEqual(pooled["prec_1px"], 1.0)
+        self.assertEqual(pooled["mean_px"], 0.0)
+        self.assertEqual(pooled["mean_mm"], 0.0)
+        self.assertEqual(pooled["coverage"], 1.0)
+
+
+class Matching(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.matcher = gimm.Matcher()
+
+    def test_matcher_returns_finite_arrays_gated_by_the_exact_F(self):
+        self.assertEqual(self.matcher.input_size, 128)
+        a, b = carm(*VIEW_A), carm(*VIEW_B)
+        ia = renderer().render(a)["intensity"]
+        ib = renderer().render(b)["intensity"]
+        out = self.matcher.match(ia, ib, 8, 10, a.camera(), b.camera())
+        n = len(out["confidence"])
+        self.assertGreater(out["network_matches"], 10)  # the phantom-trained network: a few dozen
+        self.assertGreater(n, 0)
+        self.assertEqual(out["points_a"].shape, (n, 2))
+        self.assertEqual(out["points_b"].shape, (n, 2))
+        for key in ("points_a", "points_b", "confidence"):
+            self.assertTrue(np.isfinite(out[key]).all(), key)
+        self.assertEqual(out["F_source"], "cameras")
+        np.testing.assert_allclose(out["F"], gimm.fundamental_from_cameras(a, b))
+        d2 = gimm.symmetric_epipolar_distance_sq(out["F"], out["points_a"], out["points_b"])
+        self.assertLessEqual(d2.max(), 4.0 + 1e-9)  # the hard gate: <= 2 px
+        self.assertEqual(n + out["dropped_by_gate"] + out["dropped_in_padding"],
+                         out["network_matches"])
+        self.assertTrue(is_capsule_view(out["confidence"]))
+        # Without cameras: F from the matches (or none), nothing dropped by a gate off.
+        free = self.matcher.match(ia, ib, 8, 10, gate="none")
+        self.assertEqual(free["F_source"], "none")
+        self.assertEqual(free["dropped_by_gate"], 0)
+        # Scored against the pair's labels: finite numbers.
+        pair = gimm.label_pair(phantom()["centerlines"]["LCA"], a, b,
+                               renderer().render(a)["vessel_mask"],
+                               renderer().render(b)["vessel_mask"])
+        pooled = gimm.evaluate(pair, out)["pooled"]
+        self.assertGreater(pooled["scored"], 0)
+        self.assertTrue(np.isfinite(pooled["mean_px"]) and np.isfinite(pooled["prec_3px"]))
+
+    def test_same_matches_as_gimm_match(self):
+        drr, match = cli("gimm-drr"), cli("gimm-match")
+        if drr is None or match is None:
+            self.skipTest("gimm-drr / gimm-match not built")
+        p = phantom()
+        hu, label = tmp_path("match", "hu.nii.gz"), tmp_path("match", "label.nii.gz")
+        gimm.write_nifti(hu, p["hu"], p["geometry"])
+        gimm.write_nifti(label, p["label"], p["geometry"])
+        prefixes = []
+        for name, (primary, secondary) in (("a", VIEW_A), ("b", VIEW_B)):
+            prefix = tmp_path("match", name)
+            run(drr, "--volume", hu, "--label", label, "--system", "LCA", "--primary", primary,
+                "--secondary", secondary, "--rows", 128, "--cols", 128, "--pixel", 2, "--out",
+                prefix, "--quiet")
+            prefixes.append(prefix)
+        out = tmp_path("match", "matches.json")
+        run(match, "--image-a", prefixes[0] + ".png", "--image-b", prefixes[1] + ".png",
+            "--class-a", 8, "--class-b", 10, "--camera-a", prefixes[0] + ".camera.json",
+            "--camera-b", prefixes[1] + ".camera.json", "--out", out)
+        reference = gimm.read_matches(out)
+        mine = self.matcher.match(gimm.read_png(prefixes[0] + ".png"),
+                                  gimm.read_png(prefixes[1] + ".png"), 8, 10,
+                                  gimm.read_camera(prefixes[0] + ".camera.json"),
+                                  gimm.read_camera(prefixes[1] + ".camera.json"))
+        self.assertGreater(len(reference["confidence"]), 0)
+        for key in ("points_a", "points_b", "confidence", "F"):
+            np.testing.assert_allclose(mine[key], reference[key], rtol=1e-12, atol=1e-12,
+                                       err_msg=key)
+        self.assertEqual(reference["F_source"], mine["F_source"])
+
+    def test_same_scores_as_gimm_eval(self):
+        a, b = carm(*VIEW_A), carm(*VIEW_B)
+        pair = gimm.label_pair(phantom()["centerlines"]["LCA"], a, b,
+                               renderer().render(a)["vessel_mask"],
+                               renderer().render(b)["vessel_mask"], sparse_count=20, seed=2)
+        sparse = pair["sparse"]
+        truth_path = tmp_path("eval", "truth.json")
+        with open(truth_path, "w") as f:
+            json.dump({"format": "gimm-truth/1", "pair": "phantom-7/LCA_8-10",
+                       "points_a": pair["points_a"][sparse].tolist(),
+                       "points_b": pair["points_b"][sparse].tolist(),
+                       "world_mm": pair["world_mm"][sparse].tolist(),
+                       "F": pair["F"].tolist()}, f)
+        predictions = self.matcher.match(renderer().render(a)["intensity"],
+                                         renderer().render(b)["intensity"], 8, 10, a, b)
+        matches_path = tmp_path("eval", "matches.json")
+        gimm.write_matches(matches_path, predictions, pair="phantom-7/LCA_8-10")
+        back = gimm.read_matches(matches_path)
+        np.testing.assert_array_equal(back["points_a"], predictions["points_a"])
+        truth = gimm.read_user_truth(truth_path, radius_px=3.0)
+        self.assertEqual(truth["mask_a"].dtype, np.uint8)
+        for k in (20, 0):
+            mine = gimm.evaluate(truth, back, top_k=k)["pooled"]
+            # The same from plain arrays (the discs come from radius_px).
+            plain = {key: pair[key][sparse] for key in ("points_a", "points_b", "world_mm")}
+            plain["F"] = pair["F"]
+            self.assertEqual(gimm.evaluate(plain, predictions, top_k=k)["pooled"], mine)
+            exe = cli("gimm-eval")
+            if exe is None:
+                continue
+            out_dir = tmp_path("eval", f"out-{k}", "x")[:-2]
+            run(exe, "--truth", truth_path, "--matches", matches_path, "--top-k", k,
+                "--out", out_dir)
+            with open(out_dir + "/summary.json") as f:
+                reference = json.load(f)["pooled"]
+            self.assertEqual(set(reference), set(mine))
+            for key, value in reference.items():
+                if value is None:
+                    self.assertIsNone(mine[key], key)
+                else:
+                    self.assertAlmostEqual(mine[key], value, places=12, msg=key)
+        if cli("gimm-eval") is None:
+            self.skipTest("gimm-eval not built (scored in Python only)")
+
+    def test_bad_images(self):
+        image = np.ones((128, 128), np.float32)
+        with self.assertRaisesRegex(TypeError, r"image_a: .* got uint8 .*image / 255"):
+            self.matcher.match(np.ones((128, 128), np.uint8), image)
+        with self.assertRaisesRegex(ValueError, r"image_b: expected a 2D array, got shape \(128,"):
+            self.matcher.match(image, np.ones(128, np.float32))
+        with self.assertRaisesRegex(gimm.Error, "give both cameras or neither"):
+            self.matcher.match(image, image, camera_a=carm(0, 0))
+        with self.assertRaisesRegex(gimm.Error, "too small for the matcher"):
+            self.matcher.match(np.ones((4, 4)), np.ones((4, 4)), input_size=0)
+        with self.assertRaises(gimm.IoError) as caught:
+            gimm.Matcher(tmp_path("match", "missing.safetensors"))
+        self.assertIn("missing.safetensors", str(caught.exception))
+        with self.assertRaisesRegex(ValueError, "missing 'points_b'"):
+            gimm.evaluate({"points_a": np.zeros((3, 2))}, {"points_a": np.zeros((0, 2)),
+                                                          "points_b": np.zeros((0, 2))})
+
+
+if __name__ == "__main__":
+    unittest.main()

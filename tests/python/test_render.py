@@ -1,0 +1,267 @@
+"""Volumes and rendering from Python: zero-copy outputs, the same line integrals as gimm-drr and as
+an analytic chord-length computation, the GIL released, files and bad inputs."""
+import threading
+import time
+import unittest
+
+import numpy as np
+
+import gimm
+from common import carm, cli, is_capsule_view, lca, phantom, renderer, run, tmp_path
+
+
+def box_chords(camera, lo, hi):
+    """Chord length (mm) of every pixel's ray through the world box [lo, hi] (slab method)."""
+    out = np.zeros((camera.rows, camera.cols))
+    for v in range(camera.rows):
+        for u in range(camera.cols):
+            origin, d = camera.ray(u, v)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t1, t2 = (lo - origin) / d, (hi - origin) / d
+            enter = np.nanmax(np.minimum(t1, t2))
+            leave = np.nanmin(np.maximum(t1, t2))
+            out[v, u] = max(0.0, leave - enter)
+    return out
+
+
+class ZeroCopy(unittest.TestCase):
+    def test_render_outputs_are_views_of_gimm_buffers(self):
+        view = renderer().render(carm(30, 20))
+        self.assertEqual(set(view), {"line_integrals", "intensity", "vessel_mask"})
+        for name, array in view.items():
+            self.assertTrue(is_capsule_view(array), name)
+            self.assertEqual(array.shape, (128, 128))
+            self.assertTrue(array.flags.c_contiguous and array.flags.writeable, name)
+        self.assertEqual(view["line_integrals"].dtype, np.float32)
+        self.assertEqual(view["vessel_mask"].dtype, np.uint8)
+        np.testing.assert_allclose(view["intensity"], np.exp(-view["line_integrals"]), rtol=1e-6)
+        self.assertGreater(int(view["vessel_mask"].sum()), 100)
+        # The buffer outlives the renderer and everything else but the array.
+        r = gimm.Renderer(phantom()["hu"], geometry=phantom()["geometry"])
+        li = r.render(carm(0, 0))["line_integrals"]
+        before = li.copy()
+        del r
+        np.testing.assert_array_equal(li, before)
+        plain = gimm.Renderer(phantom()["hu"], geometry=phantom()["geometry"])
+        self.assertEqual(set(plain.render(carm(0, 0), intensity=False)), {"line_integrals"})
+
+    def test_phantom_and_read_volume_are_views_too(self):
+        p = phantom()
+        for name in ("hu", "label"):
+            self.assertTrue(is_capsule_view(p[name]), name)
+            self.assertTrue(p[name].flags.f_contiguous)
+        self.assertEqual(p["hu"].shape, (128, 128, 64))
+        path = tmp_path("volumes", "hu.nii.gz")
+        gimm.write_nifti(path, p["hu"], p["geometry"])
+        hu, geometry = gimm.read_volume(path, dtype="int16")
+        self.assertTrue(is_capsule_view(hu))
+        np.testing.assert_array_equal(hu, p["hu"])
+        for key in ("spacing", "origin", "direction"):
+            np.testing.assert_allclose(geometry[key], p["geometry"][key], atol=1e-5)
+        as_float, _ = gimm.read_volume(path)
+        self.assertEqual(as_float.dtype, np.float32)
+        np.testing.assert_array_equal(as_float, p["hu"].astype(np.float32))
+
+    def test_nifti_orientation_matches_nibabel(self):
+        try:
+            import nibabel
+        except ImportError:
+            self.skipTest("no nibabel (python3-nibabel)")
+        rng = np.random.default_rng(0)
+        volume = rng.normal(size=(6, 5, 4)).astype(np.float32)
+        direction = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])  # a rotated grid
+        path = tmp_path("volumes", "oriented.nii")
+        gimm.write_nifti(path, volume, dict(spacing=[1.5, 2, 3], origin=[-10, 20, 5],
+                                            direction=direction))
+        image = nibabel.load(path)
+        np.testing.assert_array_equal(np.asarray(image.dataobj), volume)  # [i, j, k], as gimm
+        lps_from_ras = np.diag([-1.0, -1, 1])
+        affine = image.affine
+        np.testing.assert_allclose(lps_from_ras @ affine[:3, 3], [-10, 20, 5], atol=1e-4)
+        np.testing.assert_allclose(lps_from_ras @ affine[:3, :3], direction @ np.diag([1.5, 2, 3]),
+                                   atol=1e-5)
+        back, geometry = gimm.read_volume(path)
+        np.testing.assert_array_equal(back, volume)
+        np.testing.assert_allclose(geometry["direction"], direction, atol=1e-6)
+
+
+class RenderValues(unittest.TestCase):
+    def test_same_line_integrals_as_gimm_drr(self):
+        exe = cli("gimm-drr")
+        if exe is None:
+            self.skipTest("gimm-drr not built (the analytic test below still runs)")
+        p = phantom()
+        hu, label = tmp_path("drr", "hu.nii.gz"), tmp_path("drr", "label.nii.gz")
+        gimm.write_nifti(hu, p["hu"], p["geometry"])
+        gimm.write_nifti(label, p["label"], p["geometry"])
+        prefix = tmp_path("drr", "lao30cra20")
+        run(exe, "--volume", hu, "--label", label, "--system", "LCA", "--primary", "30",
+            "--secondary", "20", "--rows", "128", "--cols", "128", "--pixel", "2", "--out", prefix,
+            "--quiet")
+        reference = np.load(prefix + ".npy")
+        self.assertEqual(reference.dtype, np.float32)
+        # The same inputs as gimm-drr: the files (NIfTI keeps the grid in float32), its system
+        # split and its isocentre rule.
+        ct, geometry = gimm.read_volume(hu)
+        vessels = gimm.split_coronary_systems(gimm.read_volume(label, dtype="uint8")[0],
+                                              geometry)["lca"]
+        view_carm = gimm.CArm(primary_deg=30, secondary_deg=20, rows=128, cols=128, pixel_mm=2,
+                              isocenter=gimm.vessel_isocenter(vessels, geometry))
+        view = gimm.Renderer(ct, vessels, geometry=geometry).render(view_carm)
+        np.testing.assert_array_equal(view["line_integrals"], reference)
+        camera = gimm.read_camera(prefix + ".camera.json")
+        np.testing.assert_allclose(camera.P, view_carm.camera().P, rtol=1e-12)
+        # The phantom straight from memory differs from the files' float32 grid by rounding only.
+        np.testing.assert_allclose(renderer().render(carm(30, 20))["line_integrals"], reference,
+                                   rtol=1e-5, atol=1e-6)
+
+    def test_line_integrals_are_attenuation_times_chord_length(self):
+        mu = 0.02  # mm^-1, a uniform box: line integral = mu * chord
+        dims, spacing = np.array([40, 30, 20]), np.array([2.0, 2.5, 3.0])
+        lo = -dims * spacing / 2
+        hi = -lo
+        origin = lo + spacing / 2  # centre of voxel (0, 0, 0)
+        volume = np.full(tuple(dims), mu, np.float32, order="F")
+        camera = gimm.CArm(primary_deg=20, secondary_deg=10, rows=48, cols=48,
+                           pixel_mm=2.5).camera()
+        expected = mu * box_chords(camera, lo, hi)
+        self.assertGreater(expected.max(), 0.5)
+        r = gimm.Renderer(volume, spacing=spacing, origin=origin, recipe="none", pad_mm=0)
+        np.testing.assert_allclose(r.render(camera)["line_integrals"], expected, atol=2e-5)
+        # Trilinear marching blurs the box's faces and edges over a voxel (the field falls off
+        # linearly outside the last voxel centres): compared on the rays through the box shrunk
+        # by a voxel, where 95% are within 1%.
+        through = box_chords(camera, lo + spacing, hi - spacing) > 0
+        r = gimm.Renderer(volume, spacing=spacing, origin=origin, recipe="none", pad_mm=0,
+                          projector="trilinear", step_mm=0.5)
+        error = np.abs(r.render(camera)["line_integrals"] - expected)[through] / expected[through]
+        self.assertLess(np.quantile(error, 0.95), 0.01)
+        # The same box with the i axis flipped (direction -x, origin at the other end).
+        flipped = gimm.Renderer(volume[::-1], spacing=spacing, recipe="none", pad_mm=0,
+                                origin=[hi[0] - spacing[0] / 2, origin[1], origin[2]],
+                                direction=np.diag([-1.0, 1, 1]))
+        np.testing.assert_allclose(flipped.render(camera)["line_integrals"], expected, atol=2e-5)
+
+    def test_input_layouts_and_dtypes_give_the_same_image(self):
+        p = phantom()
+        camera = carm(-30, -20)
+        base = renderer().render(camera)["line_integrals"]
+        for hu in (np.ascontiguousarray(p["hu"]), p["hu"].astype(np.float32),
+                   np.asfortranarray(p["hu"].astype(np.float64))):
+            r = gimm.Renderer(hu, lca().astype(bool), geometry=p["geometry"])
+            np.testing.assert_array_equal(r.render(camera)["line_integrals"], base)
+        # The ITK/SimpleITK (z, y, x) C-ordered layout: its transpose is gimm's, as a view.
+        zyx = np.ascontiguousarray(p["hu"].T)
+        r = gimm.Renderer(zyx.T, lca(), geometry=p["geometry"])
+        np.testing.assert_array_equal(r.render(camera)["line_integrals"], base)
+
+    def test_vessel_depth_and_occlusion(self):
+        p = phantom()
+        r = gimm.Renderer(p["hu"], lca(), geometry=p["geometry"], vessel_depth=True)
+        view = r.render(carm(30, 20))
+        self.assertEqual(view["overlap"].dtype, np.uint8)
+        mask = view["vessel_mask"] > 0
+        self.assertTrue(np.isfinite(view["depth_mm"][mask]).mean() > 0.9)
+        self.assertTrue(np.isinf(view["depth_mm"][~mask]).all())
+        points = p["centerlines"]["LCA"]["points"]
+        seen = r.unoccluded(carm(30, 20), points)
+        self.assertEqual(seen.shape, (len(points),))
+        self.assertGreater(seen.mean(), 0.5)
+
+
+class Torch(unittest.TestCase):
+    def test_tensors_in_and_out_without_a_copy_out(self):
+        try:
+            import torch
+        except ImportError:
+            self.skipTest("no PyTorch (scripts/install-deps.sh train)")
+        p = phantom()
+        camera = carm(30, 20)
+        base = renderer().render(camera)
+        # In: CPU tensors are read through numpy's view of them (then copied into gimm).
+        r = gimm.Renderer(torch.from_numpy(p["hu"]), torch.from_numpy(lca()),
+                          geometry=p["geometry"])
+        view = r.render(camera)
+        np.testing.assert_array_equal(view["line_integrals"], base["line_integrals"])
+        # Out: torch.from_numpy shares the buffer gimm rendered into.
+        tensor = torch.from_numpy(view["intensity"])
+        self.assertEqual(tensor.data_ptr(), view["intensity"].ctypes.data)
+        del view
+        self.assertAlmostEqual(float(tensor.mean()), float(base["intensity"].mean()), places=5)
+
+
+class GilAndThreads(unittest.TestCase):
+    def test_rendering_releases_the_gil(self):
+        """The main thread runs Python code while another thread is inside render(): with the
+        GIL held for the whole render, no main-thread tick could fall inside one."""
+        r = renderer()
+        camera = carm(30, 20, size=384).camera()
+        renders, done = [], threading.Event()
+
+        def work():
+            gimm.set_num_threads(1)  # this thread's renders (OpenMP keeps it per thread)
+            for _ in range(3):
+                start = time.perf_counter()
+                r.render(camera)
+                renders.append((start, time.perf_counter()))
+            done.set()
+
+        worker = threading.Thread(target=work)
+        ticks = []
+        worker.start()
+        while not done.is_set():
+            ticks.append(time.perf_counter())
+        worker.join()
+        ticks = np.array(ticks)
+        inside = [int(((ticks > a) & (ticks < b)).sum()) for a, b in renders]
+        self.assertGreaterEqual(sum(n > 10 for n in inside), 2,
+                                f"main-thread ticks inside each render: {inside}")
+
+
+class BadInput(unittest.TestCase):
+    def test_missing_and_malformed_files(self):
+        missing = tmp_path("volumes", "no-such-ct.nii.gz")
+        with self.assertRaises(gimm.IoError) as caught:
+            gimm.read_volume(missing)
+        self.assertIn(missing, str(caught.exception))
+        self.assertTrue(str(caught.exception).startswith("gimm: "))
+        self.assertIsInstance(caught.exception, gimm.Error)
+        self.assertIsInstance(caught.exception, OSError)
+        bad = tmp_path("volumes", "garbage.nii")
+        with open(bad, "wb") as f:
+            f.write(b"not a nifti file" * 40)
+        with self.assertRaises(gimm.FormatError) as caught:
+            gimm.read_volume(bad)
+        self.assertIn(bad, str(caught.exception))
+        with self.assertRaisesRegex(gimm.Error, "unknown volume format"):
+            gimm.read_volume(tmp_path("volumes", "ct.dcm"))
+
+    def test_wrong_dtypes_and_shapes(self):
+        p = phantom()
+        hu, g = p["hu"], p["geometry"]
+        with self.assertRaisesRegex(TypeError, "expected a real numeric array, got complex128"):
+            gimm.Renderer(hu.astype(complex), geometry=g)
+        with self.assertRaisesRegex(ValueError, r"expected a 3D array, got shape \(128, 128\)"):
+            gimm.Renderer(hu[:, :, 0], geometry=g)
+        with self.assertRaisesRegex(TypeError, "bool or integer mask"):
+            gimm.Renderer(hu, lca().astype(np.float32), geometry=g)
+        with self.assertRaisesRegex(TypeError, r"numpy array \(or a CPU tensor\), got list"):
+            gimm.Renderer([[[0.0]]])
+        with self.assertRaisesRegex(gimm.Error, "grids disagree"):
+            gimm.Renderer(hu, lca()[:, :, :32], geometry=g)
+        with self.assertRaisesRegex(gimm.Error, "recipe 'none'"):
+            gimm.Renderer(hu, lca(), geometry=g, recipe="none")
+        with self.assertRaisesRegex(ValueError, "unknown field 'lumen'"):
+            gimm.Renderer(hu, geometry=g, recipe={"preset": "angiography", "lumen": 1})
+        with self.assertRaisesRegex(ValueError, r"spacing: expected shape \(3,\), got \(2,\)"):
+            gimm.Renderer(hu, spacing=[1, 1])
+        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be finite and > 0"):
+            gimm.Renderer(hu, spacing=[0, 1, 1])
+        with self.assertRaisesRegex(TypeError, "expected a gimm.Camera or gimm.CArm"):
+            renderer().render("AP")
+        with self.assertRaisesRegex(ValueError, r"mask values must be in \[0, 255\]"):
+            gimm.vessel_isocenter(lca().astype(np.int32) * 300, g)
+
+
+if __name__ == "__main__":
+    unittest.main()
