@@ -412,6 +412,10 @@ int main(int argc, char** argv) {
                            seed);
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
+    for (const auto& [flag, frame] : {std::pair{"--frame-a", frame_a}, {"--frame-b", frame_b}})
+      GIMM_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
+    GIMM_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,
+               "--max-reprojection must be > 0 px, got " << max_reprojection);
     LoadedPair loaded_pair;
     if (!dicom_a.empty() || !dicom_b.empty()) {
       GIMM_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");

@@ -85,6 +85,10 @@ run("gimm-match", "--dicom-a", T("text.dcm"), "--dicom-b", T("b.dcm"), "--out", 
     contains="text.dcm: not a DICOM file")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--frame-b", 3, "--out", out,
     ok=False, contains="frame 3 is out of range")
+run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--frame-a", -3, "--out", out,
+    ok=False, contains="--frame-a must be >= 0, got -3")
+run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--tree", T("bad.tree.json"),
+    "--max-reprojection", -5, "--out", out, ok=False, contains="--max-reprojection must be > 0")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--out", out, ok=False, contains="--dicom-b")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--image-a", T("a.png"),
     ok=False, contains="no --image-a/b")
