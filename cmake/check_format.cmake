@@ -1,9 +1,10 @@
 # cmake -DCLANG_FORMAT=... -DSOURCE=... -P check_format.cmake
-# Fails, listing the files, if any C++ file under include/ examples/ tests/ benchmarks/ is not
-# formatted as .clang-format says. Fix with: scripts/format.sh
+# Fails, listing the files, if any C++ file under include/ examples/ tests/ benchmarks/
+# packaging/ is not formatted as .clang-format says. Fix with: scripts/format.sh
 file(GLOB_RECURSE files
   ${SOURCE}/include/*.hpp ${SOURCE}/examples/*.cpp ${SOURCE}/examples/*.hpp
-  ${SOURCE}/tests/*.cpp ${SOURCE}/tests/*.hpp ${SOURCE}/benchmarks/*.cpp ${SOURCE}/benchmarks/*.hpp)
+  ${SOURCE}/tests/*.cpp ${SOURCE}/tests/*.hpp ${SOURCE}/benchmarks/*.cpp ${SOURCE}/benchmarks/*.hpp
+  ${SOURCE}/packaging/*.cpp)
 execute_process(COMMAND ${CLANG_FORMAT} --dry-run --Werror ${files}
   RESULT_VARIABLE rc ERROR_VARIABLE err OUTPUT_QUIET)
 if(NOT rc EQUAL 0)
