@@ -121,4 +121,14 @@ Scalar sampson_distance_sq(const Matrix3<Scalar>& F, const Eigen::Matrix<Scalar,
   return r * r / denom;
 }
 
+// The double instantiations above are the costly ones to compile (Eigen decompositions):
+// gimm's own binaries compile them once (src/instances/) and see them as extern here.
+// Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
+#define GIMM_EPIPOLAR_INSTANCES(EXTERN)                                                   \
+  EXTERN template Matrix3<double> fundamental_from_cameras<double>(const Camera<double>&, \
+                                                                   const Camera<double>&);
+#ifdef GIMM_EXTERN_INSTANCES
+GIMM_EPIPOLAR_INSTANCES(extern)
+#endif
+
 }  // namespace gimm

@@ -342,4 +342,18 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   return result;
 }
 
+// The double instantiations above are the costly ones to compile (Eigen decompositions):
+// gimm's own binaries compile them once (src/instances/) and see them as extern here.
+// Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
+#define GIMM_FUNDAMENTAL_INSTANCES(EXTERN)                                     \
+  EXTERN template std::optional<Matrix3<double>> fundamental_8pt<double>(      \
+      const Points2<double>&, const Points2<double>&, const VectorX<double>&); \
+  EXTERN template std::optional<Matrix3<double>> fundamental_affine<double>(   \
+      const Points2<double>&, const Points2<double>&, const VectorX<double>&); \
+  EXTERN template RansacResult<double> estimate_fundamental_ransac<double>(    \
+      const Points2<double>&, const Points2<double>&, const RansacOptions&);
+#ifdef GIMM_EXTERN_INSTANCES
+GIMM_FUNDAMENTAL_INSTANCES(extern)
+#endif
+
 }  // namespace gimm

@@ -171,4 +171,16 @@ GateResult<Scalar> gate_reference(const Points2<Scalar>& x_a, const Points2<Scal
   return gate_with_fundamental<Scalar>(*F, x_a, x_b, confidence, options);
 }
 
+// The double instantiations above are the costly ones to compile (Eigen decompositions):
+// gimm's own binaries compile them once (src/instances/) and see them as extern here.
+// Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
+#define GIMM_GATING_INSTANCES(EXTERN)                                                              \
+  EXTERN template std::optional<Matrix3<double>> fundamental_from_matches<double>(                 \
+      const Points2<double>&, const Points2<double>&, const VectorX<double>&, const GateOptions&); \
+  EXTERN template GateResult<double> gate_reference<double>(                                       \
+      const Points2<double>&, const Points2<double>&, const VectorX<double>&, const GateOptions&);
+#ifdef GIMM_EXTERN_INSTANCES
+GIMM_GATING_INSTANCES(extern)
+#endif
+
 }  // namespace gimm

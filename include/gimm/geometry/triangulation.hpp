@@ -111,4 +111,16 @@ inline Eigen::Vector3d pair_isocentre(const Camerad& a, const Camerad& b) {
   return *X;
 }
 
+// The double instantiations above are the costly ones to compile (Eigen decompositions):
+// gimm's own binaries compile them once (src/instances/) and see them as extern here.
+// Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
+#define GIMM_TRIANGULATION_INSTANCES(EXTERN)                                                \
+  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_dlt<double>(       \
+      const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&); \
+  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_midpoint<double>(  \
+      const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&);
+#ifdef GIMM_EXTERN_INSTANCES
+GIMM_TRIANGULATION_INSTANCES(extern)
+#endif
+
 }  // namespace gimm
