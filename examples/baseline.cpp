@@ -4,7 +4,8 @@
 //                 [--split all|train|val|test] [--max-points N]
 // oracle: the dense GT labels with N(0, sigma^2) pixel noise on the B side; epipolar: vessel
 // pixels of A matched to the nearest vessel crossing of the exact epipolar line in B
-// (include/gimm/match/baselines.hpp). One file per pair: PRED_DIR/<patient>/<pair>.json.
+// (include/gimm/match/baselines.hpp). One file per pair: PRED_DIR/<patient>/<pair>.json, all or
+// nothing: a failed run (a full disk) leaves PRED_DIR as it was.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -43,15 +44,19 @@ int main(int argc, char** argv) {
     const auto ids = reader.pair_ids(split);
     GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
     std::size_t matches = 0;
-    for (const auto& id : ids) {
-      const gimm::PairTruth truth = reader.pair(id);
-      gimm::PairInput input;
-      input.id = id;
-      input.truth = &truth;
-      const gimm::PairMatches m = matcher->match(input);
-      matches += m.size();
-      gimm::write_matches(gimm::matches_path(out, id), m);
-    }
+    // All or nothing: written under a staging folder and moved into PRED_DIR at the end, so a
+    // failure (a full disk) leaves PRED_DIR as it was.
+    gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
+      for (const auto& id : ids) {
+        const gimm::PairTruth truth = reader.pair(id);
+        gimm::PairInput input;
+        input.id = id;
+        input.truth = &truth;
+        const gimm::PairMatches m = matcher->match(input);
+        matches += m.size();
+        gimm::write_matches(gimm::matches_path(staged, id), m);
+      }
+    });
     std::printf("gimm-baseline %s: %zu pairs, %zu matches -> %s\n", method.c_str(), ids.size(),
                 matches, out.c_str());
     return 0;

@@ -8,6 +8,8 @@
 // Shards: --shard I/N, else SLURM_ARRAY_TASK_ID + SLURM_ARRAY_TASK_COUNT, else
 // JOB_COMPLETION_INDEX (Kubernetes Indexed Job) + GIMM_SHARD_COUNT. Patient k (in id order)
 // belongs to shard k mod N. A killed run started again skips finished patients (done.json).
+// A failed run (a full disk) leaves no partial patient, temporary, manifest or split list: only
+// the patients it finished, which a rerun skips (pipeline/dataset_run.hpp).
 #include <cstdio>
 #include <filesystem>
 
@@ -78,7 +80,6 @@ int main(int argc, char** argv) {
       std::printf("gimm-dataset merge: %zu shards, %zu patients -> %s\n", merged.shards,
                   merged.manifest.at("patients").size(),
                   gimm::DatasetLayout(out).manifest().c_str());
-      gimm::export_if_asked(export_format, out);
       return 0;
     }
     GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");

@@ -123,22 +123,19 @@ int main(int argc, char** argv) {
                           {"mu_water_per_mm", recipe.mu_water},
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
-    // All or nothing: each file is written atomically, and if a later one fails (a full disk)
-    // the earlier ones of this command are removed.
-    std::vector<std::filesystem::path> outputs = {out_prefix + ".npy", out_prefix + ".png",
-                                                  out_prefix + ".camera.json"};
-    if (dicom) outputs.push_back(out_prefix + ".dcm");
-    gimm::write_all_or_nothing(outputs, [&] {
-      gimm::write_npy(outputs[0], line_integrals);
+    // All or nothing: the files are written to temporaries and renamed into place together, so
+    // a failure (a full disk) leaves the files of an earlier run at PREFIX as they were.
+    gimm::write_all_or_nothing([&](const auto& at) {
+      gimm::write_npy(at(out_prefix + ".npy"), line_integrals);
       const gimm::Image<std::uint16_t> png =
           gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals));
-      gimm::write_png(outputs[1], png);
-      gimm::write_json_file(outputs[2], camera_json);
+      gimm::write_png(at(out_prefix + ".png"), png);
+      gimm::write_json_file(at(out_prefix + ".camera.json"), camera_json);
       if (dicom) {
         gimm::Image<float> unit(png.rows(), png.cols());
         for (int r = 0; r < png.rows(); ++r)
           for (int c = 0; c < png.cols(); ++c) unit(r, c) = png(r, c) / 65535.0f;
-        gimm::write_xa_dicom(outputs[3].string(), unit, carm);
+        gimm::write_xa_dicom(at(out_prefix + ".dcm").string(), unit, carm);
       }
     });
     const auto t_done = std::chrono::steady_clock::now();

@@ -8,11 +8,13 @@
 //   gimm-eval --tree R.json... --centerlines C.json...   3D error of triangulated points against
 //             the true centerlines (gimm-tree/1 from gimm-match --tree; one C.json, or one each)
 // Prints a Markdown table (Prec@1/3/5 px, 2D and 3D errors, coverage, exact-geometry check);
-// with --out writes summary.json, table.md, worst_pairs.md and topk.tsv (compare: compare.md).
+// with --out writes summary.json, table.md, worst_pairs.md and topk.tsv (compare: compare.md),
+// all or nothing: a failed run (a full disk) leaves DIR as it was.
 // A pair without a predictions file counts as a pair with no matches (coverage 0).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 
@@ -60,9 +62,33 @@ std::string breakdown_table(const std::string& title, const std::string& column,
   return md;
 }
 
+/// How a gnuplot script run in `folder` names `file`: by its name when it lies there (the script
+/// keeps working after the folder is moved into place), else by its absolute path.
+std::string gnuplot_path(const fs::path& file, const fs::path& folder) {
+  return file.parent_path() == folder ? file.filename().string() : fs::absolute(file).string();
+}
+
+/// Runs gnuplot on `script` in the script's folder and returns the PNG it prints. gnuplot writes
+/// no file itself: it ignores a failed write (on a full disk its chart came out truncated,
+/// without an error), so gimm writes the bytes and reports a failure.
+std::string run_gnuplot(const fs::path& script) {
+  const fs::path folder = script.has_parent_path() ? script.parent_path() : fs::path(".");
+  const std::string command =
+      "cd \"" + folder.string() + "\" && gnuplot \"" + script.filename().string() + "\"";
+  std::FILE* pipe = ::popen(command.c_str(), "r");
+  GIMM_CHECK(pipe != nullptr, "gimm-eval: cannot run gnuplot: " << std::strerror(errno));
+  std::string png;
+  char chunk[1 << 16];
+  for (std::size_t n; (n = std::fread(chunk, 1, sizeof chunk, pipe)) > 0;) png.append(chunk, n);
+  const int status = ::pclose(pipe);
+  GIMM_CHECK(status == 0 && !png.empty(), "gimm-eval: gnuplot failed on " << script.string());
+  return png;
+}
+
 /// Top-K curves (2D mean error and Prec@3px against K) of one or more runs as a PNG, through
-/// gnuplot (gnuplot-nox, installed by scripts/install-deps.sh). Written to a temporary name and
-/// renamed; without gnuplot, a warning and no chart.
+/// gnuplot (gnuplot-nox, installed by scripts/install-deps.sh); the script stays beside it as
+/// "<png>.gp" (`gnuplot topk.png.gp > topk.png` in that folder draws it again). Without gnuplot,
+/// a warning and no chart.
 void plot_topk(const std::vector<std::pair<fs::path, std::string>>& runs, const fs::path& png) {
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
     std::fprintf(stderr, "gimm-eval: warning: gnuplot not found, no %s\n", png.c_str());
@@ -73,21 +99,20 @@ void plot_topk(const std::vector<std::pair<fs::path, std::string>>& runs, const 
     std::string clean = name;
     clean.erase(std::remove(clean.begin(), clean.end(), '"'), clean.end());
     const std::string sep = left.empty() ? "" : ", ";
-    left += sep + "\"" + tsv.string() + "\" using 1:5 with linespoints title \"" + clean + "\"";
-    right += sep + "\"" + tsv.string() + "\" using 1:3 with linespoints title \"" + clean + "\"";
+    const std::string data = "\"" + gnuplot_path(tsv, png.parent_path()) + "\"";
+    left += sep + data + " using 1:5 with linespoints title \"" + clean + "\"";
+    right += sep + data + " using 1:3 with linespoints title \"" + clean + "\"";
   }
-  const fs::path tmp = png.string() + ".tmp.png", script = png.string() + ".gp";
+  const fs::path script = png.string() + ".gp";
   const std::string gp =
-      "set terminal png size 1100,420 noenhanced\nset output \"" + tmp.string() +
-      "\"\nset datafile missing \"-\"\nset multiplot layout 1,2\nset logscale x\nset grid\n"
+      "set terminal png size 1100,420 noenhanced\n"
+      "set datafile missing \"-\"\nset multiplot layout 1,2\nset logscale x\nset grid\n"
       "set key top left\nset xlabel \"K (most confident matches per pair)\"\n"
       "set ylabel \"2D mean error (px)\"\nplot " +
       left + "\nset ylabel \"Prec@3px\"\nset yrange [0:1]\nset key bottom left\nplot " + right +
       "\nunset multiplot\n";
   gimm::write_file_atomic(script, gp);
-  const int status = std::system(("gnuplot \"" + script.string() + "\"").c_str());
-  GIMM_CHECK(status == 0 && fs::exists(tmp), "gimm-eval: gnuplot failed on " << script.string());
-  fs::rename(tmp, png);
+  gimm::write_file_atomic(png, run_gnuplot(script));
 }
 
 int evaluate(const std::string& dataset, const std::string& predictions, long top_k,
@@ -153,8 +178,10 @@ int evaluate(const std::string& dataset, const std::string& predictions, long to
     worst_json.push_back(j);
   }
   std::cout << md << extra;
-  if (!out.empty()) {
-    fs::create_directories(out);
+  if (out.empty()) return 0;
+  // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
+  // (a full disk) leaves `out` as it was.
+  gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {
     nlohmann::json systems = nlohmann::json::object(), classes = nlohmann::json::object();
     for (const auto& [k, s] : by_system) systems[k] = gimm::to_json(s);
     for (const auto& [k, s] : by_class) classes[k] = gimm::to_json(s);
@@ -178,15 +205,15 @@ int evaluate(const std::string& dataset, const std::string& predictions, long to
                                     {"topk_curve", curve},
                                     {"worst_pairs", worst_json},
                                     {"pairs", per_pair}};
-    gimm::write_json_file(fs::path(out) / "summary.json", summary);
-    gimm::write_file_atomic(fs::path(out) / "table.md", md + extra + curve_md + worst_md);
-    gimm::write_file_atomic(fs::path(out) / "worst_pairs.md", worst_md.substr(1));
-    gimm::write_file_atomic(fs::path(out) / "topk.tsv", tsv);
-    plot_topk({{fs::path(out) / "topk.tsv", name}}, fs::path(out) / "topk.png");
-    std::fprintf(stderr,
-                 "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv,topk.png}\n",
-                 out.c_str());
-  }
+    gimm::write_json_file(dir / "summary.json", summary);
+    gimm::write_file_atomic(dir / "table.md", md + extra + curve_md + worst_md);
+    gimm::write_file_atomic(dir / "worst_pairs.md", worst_md.substr(1));
+    gimm::write_file_atomic(dir / "topk.tsv", tsv);
+    plot_topk({{dir / "topk.tsv", name}}, dir / "topk.png");
+  });
+  std::fprintf(stderr,
+               "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv,topk.png}\n",
+               out.c_str());
   return 0;
 }
 
@@ -210,15 +237,15 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
   }
   md = "## Comparison (top-K = " + k_label(top_k) + ")\n\n" + gimm::markdown_header() + rows;
   std::cout << md;
-  if (!out.empty()) {
-    fs::create_directories(out);
-    gimm::write_file_atomic(fs::path(out) / "compare.md", md);
-    std::vector<std::pair<fs::path, std::string>> curves;
-    for (const auto& run : runs)
-      curves.push_back({fs::path(run) / "topk.tsv",
-                        gimm::read_json_file(fs::path(run) / "summary.json").value("method", run)});
-    plot_topk(curves, fs::path(out) / "compare.png");
-  }
+  if (out.empty()) return 0;
+  std::vector<std::pair<fs::path, std::string>> curves;
+  for (const auto& run : runs)
+    curves.push_back({fs::path(run) / "topk.tsv",
+                      gimm::read_json_file(fs::path(run) / "summary.json").value("method", run)});
+  gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
+    gimm::write_file_atomic(dir / "compare.md", md);
+    plot_topk(curves, dir / "compare.png");
+  });
   return 0;
 }
 
@@ -245,17 +272,15 @@ int evaluate_user_truth(const std::vector<std::string>& truths,
                          gimm::fmt(radius, 1) + " px)\n\n" + gimm::markdown_header("pair") + rows +
                          gimm::markdown_row("pooled", gimm::summarize(pairs, top_k));
   std::cout << md;
-  if (!out.empty()) {
-    fs::create_directories(out);
-    gimm::write_all_or_nothing({fs::path(out) / "summary.json", fs::path(out) / "table.md"}, [&] {
-      gimm::write_json_file(fs::path(out) / "summary.json",
-                            {{"format", "gimm-eval/1"},
-                             {"method", "own truth"},
-                             {"top_k", top_k},
-                             {"pooled", gimm::to_json(gimm::summarize(pairs, top_k))}});
-      gimm::write_file_atomic(fs::path(out) / "table.md", md);
-    });
-  }
+  if (out.empty()) return 0;
+  gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
+    gimm::write_json_file(dir / "summary.json",
+                          {{"format", "gimm-eval/1"},
+                           {"method", "own truth"},
+                           {"top_k", top_k},
+                           {"pooled", gimm::to_json(gimm::summarize(pairs, top_k))}});
+    gimm::write_file_atomic(dir / "table.md", md);
+  });
   return 0;
 }
 
@@ -293,10 +318,10 @@ int evaluate_trees(const std::vector<std::string>& trees,
       "| tree | points | mean | median | p90 |\n| --- | --- | --- | --- | --- |\n" +
       rows + stats_row("pooled", all);
   std::cout << md;
-  if (!out.empty()) {
-    fs::create_directories(out);
-    gimm::write_file_atomic(fs::path(out) / "tree_error.md", md);
-  }
+  if (out.empty()) return 0;
+  gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
+    gimm::write_file_atomic(dir / "tree_error.md", md);
+  });
   return 0;
 }
 

@@ -26,7 +26,8 @@
 // record. Writes the gimm-matches/1 predictions format (docs/evaluation.md) that gimm-eval scores.
 // The dataset mode matches every pair of a gimm-dataset (view classes from the pair files, cameras
 // from the views unless --geometry matches, which estimates F from the matches as the
-// reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line.
+// reference does) into PRED_DIR/<patient>/<pair>.json, with a progress line. Outputs are all or
+// nothing: a failed run (a full disk) leaves PRED_DIR, or the single-pair files, as they were.
 // Images: 8- or 16-bit PNG, grey or colour (converted to grey), of any sizes; see
 // include/gimm/match/learned.hpp for padding, resizing and where F comes from.
 #include <algorithm>
@@ -118,13 +119,12 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
   return gimm::camera_from_json(gimm::read_json_file(path), path);
 }
 
-/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
-int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, const std::string& out,
-                  const gimm::CameraError& camera_error, std::uint64_t seed) {
-  gimm::DatasetReader reader(dataset);
-  const auto ids = reader.pair_ids(split);
-  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
+/// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line;
+/// returns the number of matches.
+std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
+                        const std::vector<std::string>& ids, bool use_cameras,
+                        const std::filesystem::path& pred_dir,
+                        const gimm::CameraError& camera_error, std::uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
   std::size_t total = 0;
   for (std::size_t n = 0; n < ids.size(); ++n) {
@@ -154,13 +154,34 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
       }
     }
     const gimm::PairMatches matches = matcher.match(input);
-    gimm::write_matches(gimm::matches_path(out, ids[n]), matches);
+    gimm::write_matches(gimm::matches_path(pred_dir, ids[n]), matches);
     total += matches.size();
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "\rgimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
                  ids.size(), seconds / double(n + 1),
                  seconds / double(n + 1) * double(ids.size() - n - 1));
+  }
+  return total;
+}
+
+/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
+int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
+                  const std::string& split, bool use_cameras, const std::string& out,
+                  const gimm::CameraError& camera_error, std::uint64_t seed) {
+  gimm::DatasetReader reader(dataset);
+  const auto ids = reader.pair_ids(split);
+  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
+  std::size_t total = 0;
+  // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
+  // (a full disk) leaves `out` as it was.
+  try {
+    gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
+      total = match_pairs(matcher, reader, ids, use_cameras, staged, camera_error, seed);
+    });
+  } catch (...) {
+    std::fprintf(stderr, "\n");  // the progress line ends before the error is printed
+    throw;
   }
   std::fprintf(stderr, "\n");
   std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), total, out.c_str());
@@ -249,10 +270,11 @@ int match_geometric_pair(const LoadedPair& loaded_pair, const std::string& pair,
   gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
   matches.F = gimm::fundamental_from_cameras(*input.camera_a, *input.camera_b);
   matches.F_source = "cameras";
-  gimm::write_all_or_nothing({picture, out, tree, tree_vtk}, [&] {
-    if (!picture.empty()) write_picture(picture, a, b, matches);
-    if (!out.empty()) gimm::write_matches(out, matches);
-    write_tree(tree, tree_vtk, found);
+  // All or nothing: a failure (a full disk) leaves the files of an earlier run as they were.
+  gimm::write_all_or_nothing([&](const auto& at) {
+    if (!picture.empty()) write_picture(at(picture).string(), a, b, matches);
+    if (!out.empty()) gimm::write_matches(at(out), matches);
+    write_tree(at(tree).string(), at(tree_vtk).string(), found);
   });
   std::size_t consistent = 0;
   for (const auto& m : found) consistent += m.consistent;
@@ -489,10 +511,10 @@ int main(int argc, char** argv) {
       rec = gimm::reconstruct_matches(
           result.matches, *loaded_pair.camera_a, *loaded_pair.camera_b,
           max_reprojection > 0 ? max_reprojection : options.gate.delta_px);
-    gimm::write_all_or_nothing({picture, out, tree, tree_vtk}, [&] {
-      if (!picture.empty()) write_picture(picture, a, b, result.matches);
-      if (!out.empty()) gimm::write_matches(out, result.matches);
-      if (rec) write_reconstruction(tree, tree_vtk, *rec);
+    gimm::write_all_or_nothing([&](const auto& at) {  // as in match_geometric_pair
+      if (!picture.empty()) write_picture(at(picture).string(), a, b, result.matches);
+      if (!out.empty()) gimm::write_matches(at(out), result.matches);
+      if (rec) write_reconstruction(at(tree).string(), at(tree_vtk).string(), *rec);
     });
     const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
     std::cout << "gimm-match: " << result.matches.size() << " matches (network "

@@ -6,6 +6,7 @@
 // DIR/S.centerlines.json (the analytic centerline tree, world mm, LPS). --preview adds
 // DIR/S.slice.png (axial slice through the heart, window [-200, 600] HU) and DIR/S.mip.png
 // (coronal maximum-intensity projection, anterior view, patient's left on the image right).
+// All or nothing: a failed run (a full disk) leaves DIR as it was.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -47,6 +48,25 @@ gimm::Image<std::uint8_t> coronal_mip(const gimm::Volume<std::int16_t>& hu) {
   return img;
 }
 
+/// The phantom's files at `base` + ".img.nii.gz", ".label.nii.gz", ".centerlines.json" and
+/// with `preview` ".slice.png", ".mip.png".
+void write_files(const gimm::Phantom& p, const gimm::PhantomOptions& options,
+                 const nlohmann::json& centerlines, const std::filesystem::path& base,
+                 bool preview) {
+  gimm::write_nifti(base.string() + ".img.nii.gz", p.hu, "gimm phantom HU");
+  gimm::write_nifti(base.string() + ".label.nii.gz", p.label, "gimm phantom coronary label");
+  gimm::write_json_file(base.string() + ".centerlines.json", centerlines);
+  if (preview) {
+    const Eigen::Vector3d heart =
+        gimm::phantom_grid(options.size)
+            .world_to_index(p.anatomy.base_centre +
+                            0.3 * p.anatomy.height_mm * p.anatomy.long_axis);
+    const int k = std::clamp(static_cast<int>(std::lround(heart.z())), 0, p.hu.nz() - 1);
+    gimm::write_png(base.string() + ".slice.png", axial_slice(p.hu, k));
+    gimm::write_png(base.string() + ".mip.png", coronal_mip(p.hu));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -75,12 +95,8 @@ int main(int argc, char** argv) {
     options.size = gimm::parse_phantom_size(size);
     options.dominance = gimm::parse_dominance(dominance);
     options.noise_hu = noise;
-    std::filesystem::create_directories(out_dir);
     const gimm::Phantom p = gimm::make_phantom(options);
     const auto t1 = std::chrono::steady_clock::now();
-    const std::filesystem::path base = std::filesystem::path(out_dir) / std::to_string(seed);
-    gimm::write_nifti(base.string() + ".img.nii.gz", p.hu, "gimm phantom HU");
-    gimm::write_nifti(base.string() + ".label.nii.gz", p.label, "gimm phantom coronary label");
     nlohmann::json centerlines = gimm::to_json(p.centerlines);
     centerlines["phantom"] = {{"seed", seed},
                               {"size", size},
@@ -89,16 +105,12 @@ int main(int argc, char** argv) {
                               {"noise_hu", noise},
                               {"heart_height_mm", p.anatomy.height_mm},
                               {"heart_radius_mm", p.anatomy.radius_mm}};
-    gimm::write_json_file(base.string() + ".centerlines.json", centerlines);
-    if (preview) {
-      const Eigen::Vector3d heart =
-          gimm::phantom_grid(options.size)
-              .world_to_index(p.anatomy.base_centre +
-                              0.3 * p.anatomy.height_mm * p.anatomy.long_axis);
-      const int k = std::clamp(static_cast<int>(std::lround(heart.z())), 0, p.hu.nz() - 1);
-      gimm::write_png(base.string() + ".slice.png", axial_slice(p.hu, k));
-      gimm::write_png(base.string() + ".mip.png", coronal_mip(p.hu));
-    }
+    const std::filesystem::path base = std::filesystem::path(out_dir) / std::to_string(seed);
+    // All or nothing: written under a staging folder and moved into DIR at the end, so a failure
+    // (a full disk) leaves DIR as it was (or absent).
+    gimm::write_folder_all_or_nothing(out_dir, [&](const std::filesystem::path& staged) {
+      write_files(p, options, centerlines, staged / std::to_string(seed), preview);
+    });
     const auto t2 = std::chrono::steady_clock::now();
     auto ms = [](auto a, auto b) {
       return std::chrono::duration<double, std::milli>(b - a).count();

@@ -176,4 +176,49 @@ run("gimm-drr", "--volume", slab_path, "--recipe", "none", "--primary", 0, "--se
     "--out", os.path.join(TMP, "slab_none"), ok=False, contains="slab.nii.gz")
 check(not os.path.exists(os.path.join(TMP, "slab_none.png")), "a refused volume writes nothing")
 
+# A full disk (simulated: every file limited to some bytes, harness.run_on_full_disk), every CLI
+# that writes files: it fails naming the file and the reason and leaves nothing of its own, and
+# what its output place held before stays as it was. Limits sit between the sizes of the files
+# a command writes where they differ (pair predictions, compare.md and its chart), so that some
+# files are written before the failure. (gnuplot ignores the failed write and leaves a truncated
+# chart: that counts as a failure too.)
+disk = os.path.join(TMP, "full_disk")
+os.makedirs(disk)
+ds = os.path.join(disk, "ds")
+run("gimm-dataset", "--phantom", 1, "--seed", 3, "--rows", 96, "--cols", 96, "--pixel", 2.5,
+    "--quiet", "--out", ds)
+pred, ev = os.path.join(disk, "pred"), os.path.join(disk, "eval")
+run("gimm-baseline", "--dataset", ds, "--method", "oracle", "--sigma", 0, "--out", pred)
+run("gimm-eval", "--dataset", ds, "--predictions", pred, "--out", ev)
+# Pairs are written in id order: the first file fits, a later one does not.
+pred_files = sorted(os.path.join(d, f) for d, _, fs in os.walk(pred) for f in fs)
+pred_limit = os.path.getsize(pred_files[0]) + 1
+check(max(map(os.path.getsize, pred_files)) >= pred_limit,
+      f"full disk: no prediction file is larger than the first ({pred_limit - 1} bytes)")
+shutil.copytree(ph, os.path.join(disk, "ph"))
+for ext in [".png", ".npy", ".camera.json"]:
+    shutil.copy(os.path.join(TMP, "drr_lao") + ext, os.path.join(disk, "drr" + ext))
+full_disk_runs = [
+    ("gimm-phantom", ["--seed", 5, "--out", os.path.join(disk, "phantom_new")], 100_000),
+    ("gimm-phantom", ["--seed", 5, "--preview", "--out", os.path.join(disk, "ph")], 100_000),
+    ("gimm-drr", ["--volume", os.path.join(ph, "3.img.nii.gz"), "--primary", 10, "--secondary", 5,
+                  "--rows", 128, "--cols", 160, "--pixel", 1.5, "--quiet", "--out",
+                  os.path.join(disk, "drr")], 20_000),
+    ("gimm-centerlines", ["--label", os.path.join(ph, "3.label.nii.gz"), "--out",
+                          os.path.join(disk, "ph", "3.centerlines.json")], 10_000),
+    ("gimm-baseline", ["--dataset", ds, "--method", "oracle", "--out",
+                       os.path.join(disk, "pred_new")], pred_limit),
+    ("gimm-baseline", ["--dataset", ds, "--method", "oracle", "--sigma", 2, "--out", pred],
+     pred_limit),
+    ("gimm-match", ["--dataset", ds, "--method", "oracle", "--out", os.path.join(disk, "m_new")],
+     pred_limit),
+    ("gimm-match", ["--dataset", ds, "--method", "oracle", "--sigma", 2, "--out", pred], pred_limit),
+    ("gimm-eval", ["--dataset", ds, "--predictions", pred, "--out", os.path.join(disk, "ev_new")],
+     2_000),
+    ("gimm-eval", ["--dataset", ds, "--predictions", pred, "--top-k", 5, "--out", ev], 2_000),
+    ("gimm-eval", ["--compare", ev, ev, "--out", os.path.join(disk, "cmp_new")], 2_000),
+]
+for name, args, limit in full_disk_runs:
+    h.run_on_full_disk(name, *args, limit=limit, watch=disk)
+
 h.finish("cli_test")

@@ -2,11 +2,13 @@
 """gimm-dataset end to end: labels reproject, split by patient, a run killed at any moment
 and restarted equals an uninterrupted run byte for byte (timings.json aside: wall-clock), N
 shards merged equal one run, bad patients are recorded while the rest goes on, ImageCAS
-sub-folders, dropped label voxels, single-tree labels and stage timings.
+sub-folders, dropped label voxels, single-tree labels, stage timings, and a full disk (a failed
+run, merge or export leaves nothing of its own, and a dataset already there unchanged).
 
 Usage: dataset_test.py BIN_DIR TMP_DIR
 """
 import filecmp
+import glob
 import json
 import os
 import shutil
@@ -165,8 +167,15 @@ check(sorted(seen) == [f"phantom-{n:04d}" for n in range(4)], f"splits {seen}")
 # Killed and resumed (SIGKILL at several moments) equals uninterrupted. The moments are events,
 # not times, so that each kill lands while the run is still going on this machine's speed.
 def views_written(out, patient):
-    d = os.path.join(out, "patients", patient, "views")
-    return len(os.listdir(d)) if os.path.isdir(d) else 0
+    """The patient's view files so far: in its staging folder (patients/<id>.tmp.<host>.<pid>/)
+    while it is made, in patients/<id>/ once complete."""
+    count = 0
+    for d in glob.glob(os.path.join(out, "patients", patient + "*", "views")):
+        try:
+            count = max(count, len(os.listdir(d)))
+        except FileNotFoundError:  # renamed into place meanwhile
+            pass
+    return count
 
 
 kill_moments = {
@@ -216,16 +225,21 @@ run(["merge", "--out", exp_sh, "--export", "reference"])
 same_tree(os.path.join(exp, "reference"), os.path.join(exp_sh, "reference"),
           "reference export after merge")
 
-# A shard cleans only its own patients' temporaries: another shard may be writing its files
-# into the same folder right now.
+# A shard cleans only its own patients' temporaries and staging folders: another shard may be
+# writing its files into the same folder right now.
 out = os.path.join(TMP, "shards_busy")
 busy = os.path.join(out, "patients", "phantom-0001", "views", "LCA_00.png.tmp.otherhost.77")
+staging = os.path.join(out, "patients", "phantom-0001.tmp.otherhost.78")
 os.makedirs(os.path.dirname(busy))
+os.makedirs(os.path.join(staging, "views"))
 open(busy, "w").write("being written by shard 1")
+open(os.path.join(staging, "views", "LCA_00.png"), "w").write("being made by shard 1")
 run(COMMON + ["--out", out, "--shard", "0/2"])
-check(os.path.exists(busy), "shard 0 removed a temporary file of shard 1's patient")
+check(os.path.exists(busy) and os.path.exists(staging),
+      "shard 0 removed a temporary file or staging folder of shard 1's patient")
 run(COMMON + ["--out", out, "--shard", "1/2"])
-check(not os.path.exists(busy), "shard 1 left its own stale temporary behind")
+check(not os.path.exists(busy) and not os.path.exists(staging),
+      "shard 1 left its own stale temporary or staging folder behind")
 run(["merge", "--out", out])
 same_tree(full, out, "2 shards with a stale temporary, merged")
 
@@ -438,25 +452,68 @@ out = os.path.join(TMP, "bad_ids_out")
 proc = run(["--input", bad_ids, "--out", out, "--export", "reference"] + FOLDER, ok=False)
 check("--export reference: patient id 'case_2'" in proc.stderr and "at '_'" in proc.stderr and
       not os.path.exists(os.path.join(out, "patients")), f"--export with a bad id: {proc.stderr}")
-# A write that fails in the middle of a patient (views are written on a helper thread while the
-# next one renders): that patient is recorded with an error naming the file, the others are
-# made, nothing half-written is left, and a rerun once the obstacle is gone equals a full run.
-out = os.path.join(TMP, "blocked_write")
+# An unfinished patient folder written in place (by a killed run of an older gimm), even with a
+# folder in the way of one of its files: the patient is made in its staging folder and replaces
+# it whole. (A write that fails while a patient is made: the full-disk checks below.)
+out = os.path.join(TMP, "unfinished_in_place")
 blocker = os.path.join(out, "patients", "phantom-0002", "views", "LCA_03.mask.png")
 os.makedirs(os.path.join(blocker, "in-the-way"))
+open(os.path.join(out, "patients", "phantom-0002", "views", "LCA_00.png"), "w").write("half")
 run(COMMON + ["--out", out])
-m = json.load(open(os.path.join(out, "manifest.json")))
-status = {p["id"]: p for p in m["patients"]}
-check(status.get("phantom-0002", {}).get("status") == "failed" and
-      "LCA_03.mask.png" in status["phantom-0002"].get("error", ""),
-      f"blocked patient: {status.get('phantom-0002')}")
-check(all(status.get(f"phantom-{n:04d}", {}).get("status") == "ok" for n in (0, 1, 3)),
-      f"the other patients go on: {status}")
-leftovers = [f for f in tree_files(out) if ".tmp." in f]
-check(not leftovers, f"half-written files left behind: {leftovers}")
-shutil.rmtree(blocker)
-run(COMMON + ["--out", out])
-same_tree(full, out, "rerun after a blocked write")
+same_tree(full, out, "a run over an unfinished patient folder")
+
+# A full disk (simulated: every file limited to N bytes, harness.run_on_full_disk): the run fails
+# naming the file and the reason, and leaves nothing of its own: no output folder, partial
+# patient, temporary or split list on a fresh target, and a dataset already there unchanged. The
+# limits come from the full run's file sizes, so that many files are written before the failure.
+disk = os.path.join(TMP, "full_disk")
+os.makedirs(disk)
+open(os.path.join(disk, "unrelated.txt"), "w").write("not gimm's")
+
+
+def sizes(pattern):
+    return [os.path.getsize(p) for p in glob.glob(os.path.join(full, "patients", pattern))]
+
+
+# Every RCA view file fits, an LCA view does not (written on the helper thread while the next
+# view renders); every view fits, an LCA pair does not (written after the views).
+view_limit = max(sizes("phantom-0000/views/RCA_*")) + 1
+pair_limit = max(sizes("*/views/*")) + 1
+check(max(sizes("phantom-0000/views/LCA_*")) >= view_limit and
+      max(sizes("phantom-0000/pairs/LCA_*")) >= pair_limit and view_limit < pair_limit,
+      f"full disk: the limits {view_limit}, {pair_limit} stop no write of phantom-0000")
+# A fresh target: no folder appears.
+h.run_on_full_disk("gimm-dataset", *COMMON, "--out", os.path.join(disk, "new"), limit=view_limit,
+                   watch=disk)
+# A killed run's folder (three finished patients, no manifest or splits yet): the fourth patient
+# fails; nothing of it appears. A rerun with room finishes it as if nothing had happened.
+partial = os.path.join(disk, "partial")
+shutil.copytree(full, partial)
+for leftover in ["patients/phantom-0003", "splits", "manifest.json"]:
+    path = os.path.join(partial, leftover)
+    shutil.rmtree(path) if os.path.isdir(path) else os.remove(path)
+h.run_on_full_disk("gimm-dataset", *COMMON, "--out", partial, limit=pair_limit, watch=disk)
+run(COMMON + ["--out", partial])
+same_tree(full, partial, "a run resumed after a full disk")
+# --export reference on a finished dataset: the export fails part way; no reference folder, and
+# the manifest and splits as they were.
+finished = os.path.join(disk, "finished")
+shutil.copytree(full, finished)
+# Marked, so that a run that rewrote them before failing (bytes equal to the originals) is seen.
+for marked in ["manifest.json", "splits/train.txt"]:
+    with open(os.path.join(finished, marked), "a") as f:
+        f.write("\n")
+h.run_on_full_disk("gimm-dataset", *COMMON, "--out", finished, "--export", "reference",
+                   limit=pair_limit, watch=disk)
+# merge --export: the shard manifests stay, no manifest.json or splits appear, and nothing of the
+# export.
+sharded = os.path.join(disk, "sharded")
+for i in range(2):
+    run(COMMON + ["--out", sharded, "--shard", f"{i}/2"])
+h.run_on_full_disk("gimm-dataset", "merge", "--out", sharded, "--export", "reference",
+                   limit=pair_limit, watch=disk)
+run(["merge", "--out", sharded])
+same_tree(full, sharded, "shards merged after a failed merge")
 
 ro = os.path.join(TMP, "read_only")
 os.makedirs(ro)

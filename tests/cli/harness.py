@@ -3,11 +3,37 @@
     h = Harness(BIN)
     proc = h.run("gimm-drr", "--volume", path, ok=False, contains="error:")
     h.check(cond, "what went wrong")
+    h.run_on_full_disk("gimm-phantom", "--out", d, limit=100_000, watch=parent)
     h.finish("cli_test")       # prints the failures and exits 1, or says all passed
 """
+import hashlib
 import os
+import resource
+import signal
 import subprocess
 import sys
+
+
+def tree_snapshot(root):
+    """Every folder and file under `root` (itself included), files with a hash of their bytes:
+    equal snapshots mean that nothing was added, removed or changed there."""
+    out = {}
+    for d, _, files in os.walk(root):
+        out[os.path.relpath(d, root) + "/"] = "folder"
+        for f in files:
+            with open(os.path.join(d, f), "rb") as data:
+                out[os.path.relpath(os.path.join(d, f), root)] = hashlib.sha1(data.read()).hexdigest()
+    return out
+
+
+def limit_file_size(limit):
+    """A preexec_fn for subprocess: every file the child writes may grow to `limit` bytes only
+    (RLIMIT_FSIZE); a write past that fails with EFBIG, as on a full disk (SIGXFSZ, which would
+    kill the child instead, is ignored). No root or special filesystem needed."""
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+    return apply
 
 
 class Harness:
@@ -27,6 +53,26 @@ class Harness:
             self.failures.append(f"{name} {args}: expected failure, got exit 0")
         if contains and contains not in out:
             self.failures.append(f"{name} {args}: output lacks {contains!r}: {out[-500:]}")
+        return proc
+
+    def run_on_full_disk(self, name, *args, limit, watch):
+        """Runs BIN/name with args on a simulated full disk (limit_file_size(limit)). Records a
+        failure unless the command fails (exit != 0) with one "error: ..." naming a path under
+        `watch` and the reason (EFBIG's "File too large"), and leaves `watch` as it was: no output,
+        temporary or folder of its own, and every file there before unchanged (all or nothing).
+        Returns the CompletedProcess."""
+        before = tree_snapshot(watch)
+        proc = subprocess.run([os.path.join(self.bin, name), *map(str, args)], capture_output=True,
+                              text=True, preexec_fn=limit_file_size(limit))
+        what = f"{name} {' '.join(map(str, args))} (files limited to {limit} bytes)"
+        error = [ln for ln in proc.stderr.splitlines() if ln.startswith("error: ")]
+        self.check(proc.returncode != 0, f"{what}: exit 0 on a full disk")
+        self.check(len(error) == 1 and watch in error[0] and "File too large" in error[0],
+                   f"{what}: want one error naming a path under {watch} and the reason, got "
+                   f"{proc.stderr[-600:]!r}")
+        after = tree_snapshot(watch)
+        changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
+        self.check(not changed, f"{what}: left {watch} changed: {changed[:8]}")
         return proc
 
     def check(self, cond, what):

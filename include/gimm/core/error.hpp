@@ -26,6 +26,14 @@ class IoError : public Error {
   using Error::Error;
 };
 
+/// An output could not be written (a full disk, no permission, something in the way). Unlike a
+/// bad input, which spoils one item, it spoils every output after it: a run that records a bad
+/// item and goes on (gimm-dataset's patients) stops at this one.
+class WriteError : public IoError {
+ public:
+  using IoError::IoError;
+};
+
 /// A file was opened but its content is malformed (bad magic, truncated, bad header).
 class FormatError : public Error {
  public:

@@ -15,6 +15,9 @@
 ///   patients/<id>/done.json                          the patient's record, written last
 ///   reference/                                       --export reference (the released layout)
 ///
+/// While a patient is made, its files go to patients/<id>.tmp.<host>.<pid>/ (with_patient_suffix),
+/// renamed to patients/<id>/ when complete: a patient's folder is there whole or not at all.
+///
 /// Views are named <SYS>_<nn> (RCA_00), pairs <SYS>_<nn>-<mm>; a pair id is
 /// "<patient>/<pair>", e.g. "phantom-0000/LCA_00-01".
 #include <filesystem>
@@ -63,7 +66,14 @@ class DatasetLayout {
 
   std::filesystem::path patients_dir() const { return root_ / "patients"; }
   std::filesystem::path patient_dir(const std::string& patient) const {
-    return patients_dir() / patient;
+    return patients_dir() / (patient + patient_suffix_);
+  }
+  /// This layout with every patient's folder "<id><suffix>" instead of "<id>": where a patient is
+  /// made before it is renamed into place (pipeline/dataset.hpp, generate_patient).
+  DatasetLayout with_patient_suffix(const std::string& suffix) const {
+    DatasetLayout staged = *this;
+    staged.patient_suffix_ = suffix;
+    return staged;
   }
   std::filesystem::path views_dir(const std::string& patient) const {
     return patient_dir(patient) / "views";
@@ -119,6 +129,7 @@ class DatasetLayout {
     return views_dir(patient) / (view + suffix);
   }
   std::filesystem::path root_;
+  std::string patient_suffix_;
 };
 
 }  // namespace gimm

@@ -186,8 +186,12 @@ class DatasetReader {
         if (p.value("status", "") == "ok") patients.push_back(p["id"].get<std::string>());
       }
     } else {
-      for (const auto& e : fs::directory_iterator(layout_.patients_dir()))
-        if (fs::exists(e.path() / "done.json")) patients.push_back(e.path().filename().string());
+      for (const auto& e : fs::directory_iterator(layout_.patients_dir())) {
+        const std::string name = e.path().filename().string();
+        // A staging folder (patients/<id>.tmp.<host>.<pid>/) is a patient being made.
+        if (name.find(".tmp.") == std::string::npos && fs::exists(e.path() / "done.json"))
+          patients.push_back(name);
+      }
     }
     if (split != "all") {
       const fs::path list = layout_.split_list(split);

@@ -70,37 +70,41 @@ inline Shard resolve_shard(const std::string& flag) {
   return s;
 }
 
-/// A killed run can leave "<file>.tmp.<host>.<pid>" behind (write_file_atomic's temporaries);
-/// they are never read, and removing them makes a resumed tree equal to an uninterrupted one.
-/// Only under `dir` and only files this process would write: other shards may be writing theirs
-/// into the same output folder right now. A prefix names top-level outputs only; without one,
-/// the whole folder (a patient's) is swept.
+/// A killed run can leave "<file>.tmp.<host>.<pid>" behind (write_file_atomic's temporaries,
+/// and staging folders: a patient's, the reference export's); they are never read, and removing
+/// them makes a resumed tree equal to an uninterrupted one. Only under `dir` and only what this
+/// process would write: other shards may be writing theirs into the same output folder right
+/// now. A prefix names top-level outputs only (files and staging folders); without one, the
+/// files of the whole folder (a patient's) are swept.
 inline void remove_stale_temporaries(const std::filesystem::path& dir,
                                      const std::string& name_prefix = "") {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir)) return;
   std::vector<fs::path> stale;
-  const auto is_stale = [&](const fs::path& p) {
-    const std::string name = p.filename().string();
-    return name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
+  const auto is_stale = [&](const fs::directory_entry& e) {
+    const std::string name = e.path().filename().string();
+    const bool kind = e.is_regular_file() || (!name_prefix.empty() && e.is_directory());
+    return kind && name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
   };
   const auto scan = [&](auto entries) {
     for (const auto& e : entries)
-      if (e.is_regular_file() && is_stale(e.path())) stale.push_back(e.path());
+      if (is_stale(e)) stale.push_back(e.path());
   };
   if (name_prefix.empty())
     scan(fs::recursive_directory_iterator(dir));
   else
     scan(fs::directory_iterator(dir));
-  for (const auto& p : stale) fs::remove(p);
+  for (const auto& p : stale) fs::remove_all(p);
 }
 
 /// The outputs written once per run (not per patient): the manifest, and when not sharded the
-/// splits and the reference export.
+/// splits and the reference export (its files, and its staging folder beside or inside it).
 inline void remove_stale_run_temporaries(const DatasetLayout& layout, const Shard& shard) {
   remove_stale_temporaries(layout.root(), layout.manifest(shard).filename().string() + ".tmp.");
   if (shard.sharded()) return;
   remove_stale_temporaries(layout.splits_dir());
+  remove_stale_temporaries(layout.root(), layout.reference_dir().filename().string() + ".tmp.");
+  remove_stale_temporaries(layout.reference_dir(), StagedFolder::kInsidePrefix);
   remove_stale_temporaries(layout.reference_dir());
 }
 
@@ -124,7 +128,8 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
                                        const nlohmann::json& run) {
   namespace fs = std::filesystem;
   const fs::path dir = layout.patient_dir(patient);
-  remove_stale_temporaries(dir);
+  remove_stale_temporaries(layout.patients_dir(), patient + ".tmp.");  // its staging folders
+  remove_stale_temporaries(dir);  // files of a patient folder written in place (before staging)
   if (!fs::exists(layout.done_record(patient))) return nullptr;
   nlohmann::json record = read_json_file(layout.done_record(patient));
   const nlohmann::json stored = record.value("run", nlohmann::json());
@@ -137,18 +142,16 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
   return record;
 }
 
-/// Joins the shard manifests of `root` into manifest.json and writes the splits; removes the
-/// shard manifests. They must all be of one run: the same parameters, input and shard count,
-/// every shard present once. `check(patients)`, if given, runs before anything is written (e.g.
-/// that an export can name every patient).
+/// The shard manifests of `root` joined into one manifest (patients sorted by id, no "shard"),
+/// nothing written yet (stale run temporaries aside). They must all be of one run: the same
+/// parameters, input and shard count, every shard present once.
 struct MergedShards {
   nlohmann::json manifest;
   std::size_t shards = 0;
+  std::vector<std::filesystem::path> shard_files;  ///< the shard manifests joined
 };
 
-inline MergedShards merge_shards(
-    const std::filesystem::path& root,
-    const std::function<void(const nlohmann::json& patients)>& check = {}) {
+inline MergedShards join_shards(const std::filesystem::path& root) {
   namespace fs = std::filesystem;
   GIMM_CHECK(fs::is_directory(root), "merge: '" << root.string() << "' is not a directory");
   const DatasetLayout layout(root);
@@ -192,14 +195,24 @@ inline MergedShards merge_shards(
   std::sort(patients.begin(), patients.end(), [](const auto& a, const auto& b) {
     return a["id"].template get<std::string>() < b["id"].template get<std::string>();
   });
-  if (check) check(patients);
   merged["patients"] = patients;
   merged.erase("shard");
-  const DatasetWriter writer(root);
-  writer.write_manifest(merged);
-  writer.write_splits(patients);
-  for (const auto& path : shards) fs::remove(path);
-  return {merged, shards.size()};
+  return {merged, shards.size(), shards};
+}
+
+/// Joins the shard manifests of `root` (join_shards) into manifest.json and the split lists,
+/// renamed into place together, then removes the shard manifests. `check(patients)`, if given,
+/// runs before anything is written (e.g. that an export can name every patient).
+inline MergedShards merge_shards(
+    const std::filesystem::path& root,
+    const std::function<void(const nlohmann::json& patients)>& check = {}) {
+  MergedShards merged = join_shards(root);
+  if (check) check(merged.manifest.at("patients"));
+  StagedFiles files;
+  DatasetWriter(root).stage_run_files(files, merged.manifest);
+  files.commit();
+  for (const auto& path : merged.shard_files) std::filesystem::remove(path);
+  return merged;
 }
 
 }  // namespace gimm

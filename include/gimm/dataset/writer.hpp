@@ -1,7 +1,9 @@
 #pragma once
 /// The one writer of a gimm dataset (layout.hpp): the JSON of views, pairs and records, and the
 /// files, each written atomically (io/files.hpp), so a reader never sees half a file and a
-/// killed run leaves only temporaries, which the run removes (run.hpp).
+/// killed run leaves only temporaries, which the run removes (run.hpp). A patient is written
+/// into its staging folder (a writer over DatasetLayout::with_patient_suffix); the manifest and
+/// split lists of a run are staged together (stage_run_files) and renamed into place at once.
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -103,12 +105,13 @@ struct ViewFiles {
 class DatasetWriter {
  public:
   explicit DatasetWriter(std::filesystem::path root) : layout_(std::move(root)) {}
+  explicit DatasetWriter(DatasetLayout layout) : layout_(std::move(layout)) {}
   const DatasetLayout& layout() const { return layout_; }
 
   /// The patient's views/ and pairs/ folders.
   void create_patient(const std::string& patient) const {
-    std::filesystem::create_directories(layout_.views_dir(patient));
-    std::filesystem::create_directories(layout_.pairs_dir(patient));
+    create_folders(layout_.views_dir(patient));
+    create_folders(layout_.pairs_dir(patient));
   }
 
   void write_view(const std::string& patient, const std::string& view, ViewFiles files) const {
@@ -144,15 +147,33 @@ class DatasetWriter {
     write_json_file(layout_.manifest(shard), manifest);
   }
 
-  /// splits/{train,val,test}.txt: the ids of the "ok" patients of each split, in record order.
+  /// splits/{train,val,test}.txt: the ids of the "ok" patients of each split, in record order;
+  /// the three lists are renamed into place together.
   void write_splits(const nlohmann::json& patients) const {
-    std::filesystem::create_directories(layout_.splits_dir());
+    StagedFiles files;
+    stage_splits(files, patients);
+    files.commit();
+  }
+
+  /// The run's own files staged in `files`, to be renamed into place together by files.commit()
+  /// (or left as they were if the run fails first): the manifest and, for a whole run (not one
+  /// shard), the split lists of its patients.
+  void stage_run_files(StagedFiles& files, const nlohmann::json& manifest,
+                       const Shard& shard = {}) const {
+    if (!shard.sharded()) stage_splits(files, manifest.at("patients"));
+    // Renamed last: a manifest in place says the run is complete.
+    write_json_file(files.path_for(layout_.manifest(shard)), manifest);
+  }
+
+ private:
+  void stage_splits(StagedFiles& files, const nlohmann::json& patients) const {
+    files.create_folder(layout_.splits_dir());
     for (const char* split : {"train", "val", "test"}) {
       std::string text;
       for (const auto& p : patients)
         if (p.value("status", "") == "ok" && p.value("split", "") == split)
           text += p["id"].get<std::string>() + "\n";
-      write_file_atomic(layout_.split_list(split), text);
+      write_file_atomic(files.path_for(layout_.split_list(split)), text);
     }
   }
 

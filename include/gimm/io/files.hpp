@@ -1,11 +1,18 @@
 #pragma once
-/// Whole-file and byte-range reads, and atomic writes.
+/// Whole-file and byte-range reads, atomic writes, and outputs that are all there or none.
 ///
 /// write_file_atomic writes to "<path>.tmp.<host>.<pid>" in the same directory, flushes, and
 /// renames over `path`, so a reader (or a run killed at any moment) sees either the old file or
 /// the complete new one, never a half-written file. The host name keeps the temporaries of
 /// processes on different machines apart (every Kubernetes pod's process may be PID 1). Errors
-/// name the file and the OS reason.
+/// name the file and the OS reason, as WriteError.
+///
+/// The outputs of one command are all or nothing, on a full disk too: StagedFiles (a few named
+/// files) and StagedFolder (a folder of them) write everything to temporaries first and rename
+/// it into place at the end. A full disk fails a write before anything is renamed, and the
+/// temporaries (and any folder made for them) are removed: what was at the output paths before
+/// is left as it was. The renames themselves are one at a time: one failing after others (no
+/// room for a directory entry, a folder in the way) leaves old and new outputs mixed.
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +26,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -99,47 +107,243 @@ inline std::string process_tag() {
   return std::string(host) + "." + std::to_string(static_cast<long>(::getpid()));
 }
 
-inline void write_file_atomic(const std::filesystem::path& path, const void* data,
-                              std::size_t size) {
-  const std::filesystem::path tmp = path.string() + ".tmp." + process_tag();
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    GIMM_CHECK_AS(IoError, f != nullptr,
-                  "cannot write '" << path.string() << "': " << std::strerror(errno));
-    const bool ok = std::fwrite(data, 1, size, f) == size && std::fflush(f) == 0;
-    const int saved_errno = errno;
-    const bool closed = std::fclose(f) == 0;
-    if (!ok || !closed) {
-      std::remove(tmp.c_str());
-      GIMM_FAIL("error writing '" << path.string() << "': " << std::strerror(saved_errno));
-    }
-  }
+/// "<path>.tmp.<host>.<pid>": this process's temporary for `path`, beside it (same folder, so
+/// same filesystem: renaming it over `path` is atomic). temporary_suffix() is what it appends.
+inline std::string temporary_suffix() {
+  return ".tmp." + process_tag();
+}
+
+inline std::filesystem::path temporary_path(const std::filesystem::path& path) {
+  return path.string() + temporary_suffix();
+}
+
+/// Writes `size` bytes to `tmp`, flushed and closed. On failure removes `tmp` and throws
+/// WriteError naming `path` (the file the bytes are for) and the OS reason.
+inline void write_whole_file(const std::filesystem::path& tmp, const std::filesystem::path& path,
+                             const void* data, std::size_t size) {
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  GIMM_CHECK_AS(WriteError, f != nullptr,
+                "cannot write '" << path.string() << "': " << std::strerror(errno));
+  const bool ok = std::fwrite(data, 1, size, f) == size && std::fflush(f) == 0;
+  const int saved_errno = errno;
+  const bool closed = std::fclose(f) == 0;
+  const int close_errno = errno;  // before std::remove, which may set errno
+  if (ok && closed) return;
+  std::remove(tmp.c_str());
+  GIMM_CHECK_AS(
+      WriteError, false,
+      "error writing '" << path.string() << "': " << std::strerror(ok ? close_errno : saved_errno));
+}
+
+/// Renames `tmp` (a file or a folder) to `path`; on failure removes `tmp` and throws WriteError
+/// naming both and the OS reason.
+inline void move_into_place(const std::filesystem::path& tmp, const std::filesystem::path& path) {
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    GIMM_FAIL("cannot move '" << tmp.string() << "' to '" << path.string()
-                              << "': " << ec.message());
-  }
+  if (!ec) return;
+  std::error_code ignored;
+  std::filesystem::remove_all(tmp, ignored);
+  GIMM_CHECK_AS(
+      WriteError, false,
+      "cannot move '" << tmp.string() << "' to '" << path.string() << "': " << ec.message());
+}
+
+inline void write_file_atomic(const std::filesystem::path& path, const void* data,
+                              std::size_t size) {
+  const std::filesystem::path tmp = temporary_path(path);
+  write_whole_file(tmp, path, data, size);
+  move_into_place(tmp, path);
 }
 
 inline void write_file_atomic(const std::filesystem::path& path, const std::string& text) {
   write_file_atomic(path, text.data(), text.size());
 }
 
-/// The outputs of one command, all there or none: runs `write`, which writes `outputs` (each
-/// atomically); if it throws (a later file failed, e.g. on a full disk), every one of `outputs`
-/// is removed and the error rethrown. Empty paths (outputs not asked for) are skipped.
-template <class Write>
-void write_all_or_nothing(const std::vector<std::filesystem::path>& outputs, Write&& write) {
-  try {
-    write();
-  } catch (...) {
-    std::error_code ignored;
-    for (const auto& path : outputs)
-      if (!path.empty()) std::filesystem::remove(path, ignored);
-    throw;
+/// Makes `dir` and its missing parents; WriteError naming it and the OS reason on failure (a
+/// folder needs space too).
+inline void create_folders(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  GIMM_CHECK_AS(WriteError, !ec, "cannot create folder '" << dir.string() << "': " << ec.message());
+}
+
+/// Folders made for a command's outputs, removed again if the command fails. create() makes a
+/// folder and its missing parents and notes each one made; unless keep() is called, the
+/// destructor removes them, children first, each only while empty: a failed command leaves no
+/// empty output folder behind, and never removes what another process put there meanwhile.
+class CreatedFolders {
+ public:
+  CreatedFolders() = default;
+  CreatedFolders(const CreatedFolders&) = delete;
+  CreatedFolders& operator=(const CreatedFolders&) = delete;
+  ~CreatedFolders() {
+    std::error_code ignored;  // a folder no longer empty stays
+    for (auto it = made_.rbegin(); it != made_.rend(); ++it) std::filesystem::remove(*it, ignored);
   }
+
+  void create(const std::filesystem::path& dir) {
+    std::vector<std::filesystem::path> missing;  // `dir` first, then its parents
+    std::error_code ec;  // a folder that cannot be looked at counts as there: making it says why
+    for (auto p = dir; !p.empty() && !std::filesystem::exists(p, ec) && !ec; p = p.parent_path()) {
+      missing.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+      const bool made = std::filesystem::create_directory(*it, ec);
+      GIMM_CHECK_AS(WriteError, !ec,
+                    "cannot create folder '" << it->string() << "': " << ec.message());
+      if (made) made_.push_back(*it);
+    }
+  }
+
+  /// The command succeeded: the folders stay.
+  void keep() { made_.clear(); }
+
+ private:
+  std::vector<std::filesystem::path> made_;  // in the order made: parents before children
+};
+
+/// A few output files committed together. Write each file to path_for(file) (its temporary,
+/// beside it); commit() renames them all into place. Until then no output file has changed; the
+/// destructor of an uncommitted batch (the command failed) removes the temporaries and the
+/// folders made with create_folder.
+class StagedFiles {
+ public:
+  StagedFiles() = default;
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles() {
+    std::error_code ignored;
+    for (const auto& staged : staged_) std::filesystem::remove(staged.first, ignored);
+  }
+
+  std::filesystem::path path_for(const std::filesystem::path& file) {
+    staged_.emplace_back(temporary_path(file), file);
+    return staged_.back().first;
+  }
+
+  /// Makes a folder for some of the files (and its missing parents), removed again unless the
+  /// batch is committed.
+  void create_folder(const std::filesystem::path& dir) { folders_.create(dir); }
+
+  void commit() {
+    for (const auto& [tmp, file] : staged_) move_into_place(tmp, file);
+    staged_.clear();
+    folders_.keep();
+  }
+
+ private:
+  CreatedFolders folders_;  // declared first: removed after the temporaries in them
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> staged_;  // (tmp, file)
+};
+
+/// A command's output folder, all or nothing: the files are written under dir(), a staging
+/// folder, and moved into `target` by commit(). A new target is staged beside it as
+/// "<target>.tmp.<host>.<pid>" and appears whole by one rename; into an existing target
+/// (Commit::merge) the staging folder is "<target>/.staging.tmp.<host>.<pid>" (the target's parent
+/// may not be writable), and commit() moves each file to the same place in the target, replacing
+/// files of the same names and keeping the others. Commit::replace stages beside the target and
+/// replaces it whole (what was there goes). Without commit() (the command failed) the destructor
+/// removes the staging folder and any parent folder made for it: the target is as it was.
+class StagedFolder {
+ public:
+  enum class Commit { merge, replace };
+  /// The name of a staging folder inside its target starts with this (then temporary_suffix()).
+  static constexpr const char* kInsidePrefix = ".staging";
+
+  explicit StagedFolder(const std::filesystem::path& target, Commit how = Commit::merge)
+      : target_(without_trailing_separator(target)), how_(how) {
+    const bool inside = how == Commit::merge && std::filesystem::is_directory(target_);
+    dir_ = inside ? target_ / (kInsidePrefix + temporary_suffix()) : temporary_path(target_);
+    std::error_code ignored;  // a killed run of this process id (a container restarted)
+    std::filesystem::remove_all(dir_, ignored);
+    folders_.create(dir_);
+  }
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+  ~StagedFolder() {
+    std::error_code ignored;
+    if (!committed_) std::filesystem::remove_all(dir_, ignored);
+  }
+
+  /// Where the outputs are written.
+  const std::filesystem::path& dir() const { return dir_; }
+  const std::filesystem::path& target() const { return target_; }
+
+  void commit() {
+    if (how_ == Commit::replace) remove_target();
+    if (std::filesystem::exists(target_))
+      move_files_into_target();
+    else
+      move_into_place(dir_, target_);  // the folder appears whole
+    committed_ = true;
+    folders_.keep();
+  }
+
+ private:
+  /// "out/" -> "out": "<target>.tmp.<tag>" must lie beside the target, not in it.
+  static std::filesystem::path without_trailing_separator(const std::filesystem::path& p) {
+    return p.has_filename() || !p.has_relative_path() ? p : p.parent_path();
+  }
+
+  void remove_target() const {
+    std::error_code ec;
+    std::filesystem::remove_all(target_, ec);
+    GIMM_CHECK_AS(WriteError, !ec, "cannot replace '" << target_.string() << "': " << ec.message());
+  }
+
+  /// Merging into an existing target: its folders first (they may need space), then the files
+  /// (renames), then the empty staging folder.
+  void move_files_into_target() {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> files;  // relative to dir_
+    for (const auto& entry : fs::recursive_directory_iterator(dir_)) {
+      const fs::path relative = entry.path().lexically_relative(dir_);
+      if (entry.is_directory())
+        create_folders(target_ / relative);
+      else
+        files.push_back(relative);
+    }
+    for (const auto& file : files) move_into_place(dir_ / file, target_ / file);
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+
+  std::filesystem::path target_, dir_;
+  Commit how_;
+  CreatedFolders folders_;
+  bool committed_ = false;
+};
+
+/// StagedFiles in one call: `write(at)` writes each output to at(path), its temporary (an empty
+/// path, an output not asked for, stays empty); they are renamed into place when `write`
+/// returns. If it throws (a full disk), every output path is left as it was; a WriteError, which
+/// names a temporary, says so.
+template <class Write>
+void write_all_or_nothing(Write&& write) {
+  StagedFiles staged;
+  try {
+    write([&](const std::filesystem::path& path) {
+      return path.empty() ? path : staged.path_for(path);
+    });
+  } catch (const WriteError& e) {
+    throw WriteError(std::string(e.what()) + "; the outputs are left as they were");
+  }
+  staged.commit();
+}
+
+/// StagedFolder in one call: `write(dir)` writes the outputs under `dir`, a staging folder, and
+/// they are moved into `target` when it returns. If it throws, `target` is left as it was; a
+/// WriteError, which names a file in the staging folder, says so.
+template <class Write>
+void write_folder_all_or_nothing(const std::filesystem::path& target, Write&& write) {
+  StagedFolder staged(target);
+  try {
+    write(staged.dir());
+  } catch (const WriteError& e) {
+    throw WriteError(std::string(e.what()) + "; '" + target.string() + "' is left as it was");
+  }
+  staged.commit();
 }
 
 /// Parses a JSON file; errors name the file and the parse position.

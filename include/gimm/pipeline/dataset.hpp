@@ -4,9 +4,11 @@
 ///
 /// The files and their layout belong to the dataset room (dataset/layout.hpp, writer.hpp);
 /// the run around this (resume, shards, merge) is pipeline/dataset_run.hpp.
-/// Every file but timings.json is written atomically and depends only on (parameters, seed,
-/// patient id), so a patient whose done.json exists is complete and is skipped on restart, and
-/// shards write disjoint patients whose union is byte-identical to one run (timings.json aside).
+/// Every file but timings.json depends only on (parameters, seed, patient id). A patient is made
+/// in a staging folder and renamed to patients/<id>/ when complete (done.json last), so a
+/// patient's folder is there whole or not at all, whatever stops the run (a bad input, a full
+/// disk, a kill); a finished patient is skipped on restart, and shards write disjoint patients
+/// whose union is byte-identical to one run (timings.json aside).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -463,7 +465,10 @@ inline nlohmann::json absent_system_record() {
 
 /// Generates one patient into out/patients/<id>/ and returns its record (also written as
 /// done.json, last, with "run" added). The stage timings go to patients/<id>/timings.json and
-/// to `timings` when given. Throws on bad input; the caller records the error.
+/// to `timings` when given. Throws on bad input (the caller records the error) and WriteError
+/// when a file cannot be written. The files are made in patients/<id>.tmp.<host>.<pid>/ and that
+/// folder replaces patients/<id>/ (an unfinished one a killed run left) when complete; on any
+/// error it is removed, and patients/<id>/ is left as it was.
 /// The data flow of shared/docs/design.md, one named step per arrow.
 inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
                                        const std::filesystem::path& out,
@@ -478,7 +483,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   const auto split =
       split_coronary_systems(patient.label, split_options, "patient " + src.id + " label");
   t.split = stage.lap();
-  const DatasetWriter writer(out);
+  const DatasetLayout layout(out);
+  StagedFolder staged(layout.patient_dir(src.id), StagedFolder::Commit::replace);
+  const DatasetWriter writer(layout.with_patient_suffix(temporary_suffix()));
+  GIMM_ASSERT(writer.layout().patient_dir(src.id) == staged.dir());
   writer.create_patient(src.id);
 
   nlohmann::json record = {{"id", src.id},
@@ -545,6 +553,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   nlohmann::json stored = record;
   stored["run"] = patient_run(src, o);
   writer.write_done_record(src.id, stored);
+  // Another process running the same shard (a requeued job beside its predecessor) may have
+  // finished this patient meanwhile: its complete folder stays, and this copy is dropped.
+  if (!std::filesystem::exists(layout.done_record(src.id))) staged.commit();
   if (timings) *timings = t;
   return record;
 }

@@ -3,6 +3,18 @@
 /// a progress line, the manifest, the splits and, if asked, the reference export. gimm-dataset is
 /// argument parsing around run_dataset and merge_dataset.
 ///
+/// What a run leaves when it fails (all or nothing, as far as resuming allows):
+///   - A patient's folder is there whole or not at all (generate_patient stages it).
+///   - A bad input fails its patient only: recorded as failed, the run goes on. An output that
+///     cannot be written (WriteError: a full disk, no permission) stops the run: the patient
+///     being made is removed, and no manifest or split list is written.
+///   - The manifest, the split lists and the reference export are written to temporaries and a
+///     staging folder and renamed into place together at the end: before that, those already
+///     there are as they were.
+///   - The patients finished before the failure stay, as after a kill: a rerun skips them. So a
+///     run that fails in its first patient leaves nothing, and the folders it made go too; a
+///     dataset that was there before gains whole patients at most.
+///
 ///   std::vector<gimm::PatientSource> sources = gimm::scan_imagecas_folder("ImageCAS/");
 ///   gimm::DatasetRunOptions run;
 ///   run.shard = gimm::resolve_shard("");          // Slurm / Kubernetes indices, or 0 of 1
@@ -14,6 +26,7 @@
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,16 +82,30 @@ class ProgressLine {
 };
 }  // namespace detail
 
-/// --export reference: the released dataset's layout in OUT/reference (nothing for "").
-inline void export_if_asked(const std::string& format, const std::filesystem::path& out) {
-  if (format.empty()) return;
-  const DatasetLayout layout(out);
-  export_reference(out, layout.reference_dir());
-  std::printf("gimm-dataset: reference layout -> %s\n", layout.reference_dir().c_str());
+/// The run's own files, all or none: the manifest and, for a whole run (not a shard), the split
+/// lists and the export asked for ("" or "reference": OUT/reference, from `manifest`). They are
+/// written to temporaries and a staging folder and renamed into place together, the manifest
+/// last; on a failure those already there are left as they were.
+inline void write_run_files(const std::filesystem::path& out, const nlohmann::json& manifest,
+                            const Shard& shard, const std::string& export_format) {
+  const DatasetWriter writer(out);
+  const DatasetLayout& layout = writer.layout();
+  StagedFiles files;
+  writer.stage_run_files(files, manifest, shard);
+  std::optional<StagedFolder> reference;
+  if (!export_format.empty()) {
+    reference.emplace(layout.reference_dir());
+    export_reference(out, manifest, layout.manifest(shard).string(), reference->dir());
+    reference->commit();
+  }
+  files.commit();
+  if (reference)
+    std::printf("gimm-dataset: reference layout -> %s\n", layout.reference_dir().c_str());
 }
 
 /// Makes the patients of `run.shard` among `sources` into `out` (see the file comment). A
-/// patient that fails is recorded as failed with its error; the others go on.
+/// patient whose input fails is recorded as failed with its error; the others go on. A
+/// WriteError stops the run (the file comment says what it leaves).
 inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
                                      const DatasetOptions& options,
                                      const std::filesystem::path& out,
@@ -94,7 +121,9 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     detail::check_export_ids(run.export_format, ids);
   }
   assign_splits(sources, options);
-  fs::create_directories(out);
+  const DatasetLayout layout(out);
+  CreatedFolders folders;  // removed again (while empty) if the run fails
+  folders.create(layout.patients_dir());
   {  // fail early, before any work, if the output is not writable
     const fs::path probe = out / (".write-test." + process_tag());
     write_file_atomic(probe, std::string("ok"));
@@ -105,7 +134,6 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     if (static_cast<int>(k % shard.count) == shard.index) mine.push_back(&sources[k]);
   // Resuming: finished patients must have been made with these parameters; unfinished ones lose
   // their temporaries.
-  const DatasetLayout layout(out);
   remove_stale_run_temporaries(layout, shard);
   std::vector<nlohmann::json> finished(mine.size());
   for (std::size_t m = 0; m < mine.size(); ++m)
@@ -130,6 +158,13 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
         if (!run.quiet) progress.log("gimm-dataset: patient " + src->id + ": " + t.summary());
         const std::string warning = dropped_voxels_warning(record, options);
         if (!warning.empty()) progress.log("gimm-dataset: warning: " + warning);
+      } catch (const WriteError&) {
+        // Every later write would fail the same way: recording this patient as failed would put
+        // a full disk into the manifest. Stop; the error names the file and the reason.
+        progress.log("gimm-dataset: patient " + src->id +
+                     " not made: its files cannot be written; stopping (patients finished so far "
+                     "are kept, and a rerun resumes after them)");
+        throw;
       } catch (const std::exception& e) {
         record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
         ++summary.failed;
@@ -156,13 +191,9 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
                              {"parameters", options.to_json()},
                              {"input", run.input},
                              {"patients", patients}};
-  const DatasetWriter writer(out);
-  if (shard.sharded())
-    manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
-  else
-    writer.write_splits(patients);
-  writer.write_manifest(manifest, shard);
-  if (!shard.sharded()) export_if_asked(run.export_format, out);
+  if (shard.sharded()) manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
+  write_run_files(out, manifest, shard, run.export_format);
+  folders.keep();
   summary.patients = patients.size();
   summary.manifest = layout.manifest(shard);
   for (const auto& p : patients)
@@ -175,16 +206,20 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   return summary;
 }
 
-/// `gimm-dataset merge`: joins the shard manifests of `out` (dataset/run.hpp merge_shards),
-/// checking first that an export of `export_format` could name every patient.
+/// `gimm-dataset merge`: joins the shard manifests of `out` (dataset/run.hpp join_shards),
+/// checks that an export of `export_format` could name every patient, writes the manifest, the
+/// split lists and the export together (write_run_files), and only then removes the shard
+/// manifests: a merge that fails leaves `out` as it was.
 inline MergedShards merge_dataset(const std::filesystem::path& out,
                                   const std::string& export_format) {
-  return merge_shards(out, [&](const nlohmann::json& patients) {
-    std::vector<std::string> ok_ids;
-    for (const auto& p : patients)
-      if (p.value("status", "") == "ok") ok_ids.push_back(p["id"].get<std::string>());
-    detail::check_export_ids(export_format, ok_ids);
-  });
+  MergedShards merged = join_shards(out);
+  std::vector<std::string> ok_ids;
+  for (const auto& p : merged.manifest.at("patients"))
+    if (p.value("status", "") == "ok") ok_ids.push_back(p["id"].get<std::string>());
+  detail::check_export_ids(export_format, ok_ids);
+  write_run_files(out, merged.manifest, Shard{}, export_format);
+  for (const auto& path : merged.shard_files) std::filesystem::remove(path);
+  return merged;
 }
 
 }  // namespace gimm

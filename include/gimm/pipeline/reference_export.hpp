@@ -243,20 +243,16 @@ inline Image<Rgb8> read_ref_image(const std::filesystem::path& path, const Camer
 /// Converts the finished gimm dataset in `dataset_dir` (manifest.json, patients/<id>/...)
 /// into the reference layout under `out_dir` (see the file comment). Patients whose manifest
 /// status is not "ok" are skipped, as the reference skips samples it could not process.
-/// Existing files of the same names are replaced; nothing else in `out_dir` is touched.
+/// Existing files of the same names are replaced; nothing else in `out_dir` is touched. This
+/// overload takes the dataset's manifest as given (`mwhere` names it in errors): a run exports
+/// before it renames its manifest into place, so that the two appear together.
 inline void export_reference(const std::filesystem::path& dataset_dir,
+                             const nlohmann::json& manifest, const std::string& mwhere,
                              const std::filesystem::path& out_dir) {
   namespace fs = std::filesystem;
   namespace rf = reference_format;
   using nlohmann::json;
   const DatasetLayout layout(dataset_dir);
-  const fs::path manifest_path = layout.manifest();
-  GIMM_CHECK_AS(IoError, fs::exists(manifest_path),
-                "export_reference: '" << manifest_path.string()
-                                      << "' does not exist (a sharded run needs 'gimm-dataset "
-                                         "merge' first)");
-  const json manifest = read_json_file(manifest_path);
-  const std::string mwhere = manifest_path.string();
   check_dataset_format(manifest, mwhere);
   const json& patients = detail::ref_field(manifest, "patients", mwhere);
   GIMM_CHECK_AS(FormatError, patients.is_array(),
@@ -283,7 +279,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   }
   rf::check_patient_ids(ids, mwhere);
   for (const char* sub : {"images", "masks", "npz_scenes", "dense_labels"})
-    fs::create_directories(out_dir / sub);
+    create_folders(out_dir / sub);
 
   for (const json* r : ok) {
     const json& record = *r;
@@ -450,6 +446,17 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   write_file_atomic(out_dir / "black_list.txt", std::string());
   write_file_atomic(out_dir / "npz_scenes" / "split_length.txt",
                     std::to_string(scenes ? total_pairs / scenes : 0));
+}
+
+/// export_reference of the dataset's manifest.json.
+inline void export_reference(const std::filesystem::path& dataset_dir,
+                             const std::filesystem::path& out_dir) {
+  const std::filesystem::path manifest_path = DatasetLayout(dataset_dir).manifest();
+  GIMM_CHECK_AS(IoError, std::filesystem::exists(manifest_path),
+                "export_reference: '" << manifest_path.string()
+                                      << "' does not exist (a sharded run needs 'gimm-dataset "
+                                         "merge' first)");
+  export_reference(dataset_dir, read_json_file(manifest_path), manifest_path.string(), out_dir);
 }
 
 }  // namespace gimm
