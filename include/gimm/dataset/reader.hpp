@@ -189,7 +189,7 @@ class DatasetReader {
       for (const auto& e : fs::directory_iterator(layout_.patients_dir())) {
         const std::string name = e.path().filename().string();
         // A staging folder (patients/<id>.tmp.<host>.<pid>/) is a patient being made.
-        if (name.find(".tmp.") == std::string::npos && fs::exists(e.path() / "done.json"))
+        if (!is_temporary_name(name) && fs::exists(e.path() / "done.json"))
           patients.push_back(name);
       }
     }
@@ -217,8 +217,7 @@ class DatasetReader {
     const fs::path dir = layout_.pairs_dir(patient);
     if (!fs::is_directory(dir)) return stems;
     for (const auto& e : fs::directory_iterator(dir))
-      if (e.path().extension() == ".json" &&
-          e.path().filename().string().find(".tmp.") == std::string::npos)
+      if (e.path().extension() == ".json" && !is_temporary_name(e.path().filename().string()))
         stems.push_back(e.path().stem().string());
     std::sort(stems.begin(), stems.end());
     return stems;

@@ -84,7 +84,7 @@ inline void remove_stale_temporaries(const std::filesystem::path& dir,
   const auto is_stale = [&](const fs::directory_entry& e) {
     const std::string name = e.path().filename().string();
     const bool kind = e.is_regular_file() || (!name_prefix.empty() && e.is_directory());
-    return kind && name.rfind(name_prefix, 0) == 0 && name.find(".tmp.") != std::string::npos;
+    return kind && name.rfind(name_prefix, 0) == 0 && is_temporary_name(name);
   };
   const auto scan = [&](auto entries) {
     for (const auto& e : entries)
@@ -100,10 +100,12 @@ inline void remove_stale_temporaries(const std::filesystem::path& dir,
 /// The outputs written once per run (not per patient): the manifest, and when not sharded the
 /// splits and the reference export (its files, and its staging folder beside or inside it).
 inline void remove_stale_run_temporaries(const DatasetLayout& layout, const Shard& shard) {
-  remove_stale_temporaries(layout.root(), layout.manifest(shard).filename().string() + ".tmp.");
+  remove_stale_temporaries(layout.root(),
+                           layout.manifest(shard).filename().string() + kTemporaryMark);
   if (shard.sharded()) return;
   remove_stale_temporaries(layout.splits_dir());
-  remove_stale_temporaries(layout.root(), layout.reference_dir().filename().string() + ".tmp.");
+  remove_stale_temporaries(layout.root(),
+                           layout.reference_dir().filename().string() + kTemporaryMark);
   remove_stale_temporaries(layout.reference_dir(), StagedFolder::kInsidePrefix);
   remove_stale_temporaries(layout.reference_dir());
 }
@@ -128,7 +130,7 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
                                        const nlohmann::json& run) {
   namespace fs = std::filesystem;
   const fs::path dir = layout.patient_dir(patient);
-  remove_stale_temporaries(layout.patients_dir(), patient + ".tmp.");  // its staging folders
+  remove_stale_temporaries(layout.patients_dir(), patient + kTemporaryMark);  // its staging folders
   remove_stale_temporaries(dir);  // files of a patient folder written in place (before staging)
   if (!fs::exists(layout.done_record(patient))) return nullptr;
   nlohmann::json record = read_json_file(layout.done_record(patient));
@@ -159,8 +161,7 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
   std::vector<fs::path> shards;
   for (const auto& e : fs::directory_iterator(root)) {
     const std::string name = e.path().filename().string();
-    if (name.rfind(DatasetLayout::kShardManifestPrefix, 0) == 0 &&
-        name.find(".tmp.") == std::string::npos)
+    if (name.rfind(DatasetLayout::kShardManifestPrefix, 0) == 0 && !is_temporary_name(name))
       shards.push_back(e.path());
   }
   GIMM_CHECK(!shards.empty(), "merge: no manifest.shard-*.json in '" << root.string() << "'");

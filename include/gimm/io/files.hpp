@@ -109,8 +109,16 @@ inline std::string process_tag() {
 
 /// "<path>.tmp.<host>.<pid>": this process's temporary for `path`, beside it (same folder, so
 /// same filesystem: renaming it over `path` is atomic). temporary_suffix() is what it appends.
+/// What marks a name as a temporary or staging name of any process: "<name>.tmp.<host>.<pid>".
+inline constexpr const char* kTemporaryMark = ".tmp.";
+
 inline std::string temporary_suffix() {
-  return ".tmp." + process_tag();
+  return kTemporaryMark + process_tag();
+}
+
+/// True for a temporary file or staging folder name (of this process or another).
+inline bool is_temporary_name(const std::string& name) {
+  return name.find(kTemporaryMark) != std::string::npos;
 }
 
 inline std::filesystem::path temporary_path(const std::filesystem::path& path) {
