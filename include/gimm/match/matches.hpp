@@ -169,7 +169,7 @@ inline std::filesystem::path matches_path(const std::filesystem::path& pred_dir,
 
 inline void write_matches(const std::filesystem::path& path, const PairMatches& m) {
   m.validate(path.string());
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  if (path.has_parent_path()) create_folders(path.parent_path());  // WriteError, named
   write_json_file(path, to_json(m), -1);
 }
 
