@@ -7,6 +7,7 @@
 #include "gimm/dataset/reader.hpp"
 #include "gimm/dataset/run.hpp"
 #include "gimm/dataset/writer.hpp"
+#include "gimm/pipeline/dataset_run.hpp"  // merge_dataset: the one merge
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -121,16 +122,16 @@ TEST_CASE("Dataset merge: shards of one run only", "[dataset]") {
   shard_manifest(0, 2, "a");
   shard_manifest(1, 2, "b");
   shard_manifest(2, 3, "c");  // stale, of another sharding: would list a patient twice
-  CHECK_THROWS_WITH(gimm::merge_shards(root), Catch::Contains("a shard of 3") &&
-                                                  Catch::Contains("a shard of") &&
-                                                  Catch::Contains("another sharding"));
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""), Catch::Contains("a shard of 3") &&
+                                                       Catch::Contains("a shard of") &&
+                                                       Catch::Contains("another sharding"));
   CHECK(fs::exists(root / "manifest.shard-0-of-2.json"));  // nothing removed on failure
   CHECK_FALSE(fs::exists(root / "manifest.json"));
   fs::remove(root / "manifest.shard-2-of-3.json");
   // A temporary of a killed shard writer is not a shard.
   gimm::write_file_atomic(root / "x.txt", std::string("x"));
   fs::rename(root / "x.txt", root / "manifest.shard-1-of-2.json.tmp.host.1");
-  const gimm::MergedShards merged = gimm::merge_shards(root);
+  const gimm::MergedShards merged = gimm::merge_dataset(root, "");
   CHECK(merged.shards == 2);
   CHECK(merged.manifest.at("patients").size() == 2);
   CHECK_FALSE(merged.manifest.contains("shard"));

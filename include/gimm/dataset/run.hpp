@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -199,21 +198,6 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
   merged["patients"] = patients;
   merged.erase("shard");
   return {merged, shards.size(), shards};
-}
-
-/// Joins the shard manifests of `root` (join_shards) into manifest.json and the split lists,
-/// renamed into place together, then removes the shard manifests. `check(patients)`, if given,
-/// runs before anything is written (e.g. that an export can name every patient).
-inline MergedShards merge_shards(
-    const std::filesystem::path& root,
-    const std::function<void(const nlohmann::json& patients)>& check = {}) {
-  MergedShards merged = join_shards(root);
-  if (check) check(merged.manifest.at("patients"));
-  StagedFiles files;
-  DatasetWriter(root).stage_run_files(files, merged.manifest);
-  files.commit();
-  for (const auto& path : merged.shard_files) std::filesystem::remove(path);
-  return merged;
 }
 
 }  // namespace gimm
