@@ -81,4 +81,21 @@ b, _ = load_file(os.path.join(TMP, "resumed", "last.safetensors"))
 assert a.keys() == b.keys()
 worst = max(float(abs(a[k] - b[k]).max()) for k in a)
 assert worst == 0.0, f"resumed weights differ from the straight run by {worst}"
-print("train_test: 2 ranks stop together; resume is exact")
+
+# --init: a fine-tune starts from another run's model, with its own schedule.
+init_ckpt = os.path.join(TMP, "straight", "checkpoint.pt")
+out = finish(train("finetune", "--init", init_ckpt, "--steps", "2", "--stop-at", "1", "--lr",
+                   "0"), "fine-tune")
+assert "stopped at step 1" in out, out
+c, _ = load_file(os.path.join(TMP, "finetune", "last.safetensors"))
+# (BatchNorm's running statistics move in any training step; the learned parameters may not.)
+worst = max(float(abs(a[k] - c[k]).max()) for k in a if "running_" not in k)
+assert worst == 0.0, f"a fine-tune at lr 0 moved the --init weights by {worst}"
+# A model option that differs from the checkpoint's is named, and nothing is trained.
+bad = train("bad_init", "--init", init_ckpt, "--no-film")
+out, _ = bad.communicate(timeout=600)
+assert bad.returncode != 0 and "no_film=False" in out and init_ckpt in out, out
+missing = train("bad_init", "--init", os.path.join(TMP, "nothing.pt"))
+out, _ = missing.communicate(timeout=600)
+assert missing.returncode != 0 and "nothing.pt does not exist" in out, out
+print("train_test: 2 ranks stop together; resume is exact; --init starts from its weights")

@@ -38,6 +38,9 @@ def parse_args(argv=None):
     p.add_argument("--dataset", required=True, help="gimm-dataset folder")
     p.add_argument("--run", required=True, help="run folder (checkpoints, logs, weights)")
     p.add_argument("--resume", action="store_true", help="continue RUN/checkpoint.pt")
+    p.add_argument("--init", default="",
+                   help="start from the model of this checkpoint.pt (a fine-tune: new schedule, "
+                        "new optimizer; the model options must be the checkpoint's)")
     p.add_argument("--minutes", type=float, default=90.0, help="wall-clock budget of this call")
     p.add_argument("--steps", type=int, default=20000, help="schedule length (cosine to 0)")
     p.add_argument("--stop-at", type=int, default=0,
@@ -279,6 +282,28 @@ def truncate_log(path, step):
         print(f"train: dropped {len(lines) - len(keep)} log entries after step {step}", flush=True)
 
 
+MODEL_OPTIONS = ("widths", "coarse_layers", "fine_layers", "no_film", "no_anchor")
+
+
+def load_init(model, args):
+    """Loads the model of --init into `model`; returns the CPU seconds that model cost, so that a
+    fine-tune reports the whole training time."""
+    if not os.path.isfile(args.init):
+        raise SystemExit(f"train: --init: {args.init} does not exist")
+    try:
+        state = torch.load(args.init)
+        saved = state["args"]
+        weights = state["model"]
+    except Exception as e:  # torch raises several types for a file that is not a checkpoint
+        raise SystemExit(f"train: --init: {args.init} is not a train.py checkpoint ({e})")
+    for name in MODEL_OPTIONS:
+        if saved.get(name) != getattr(args, name):
+            raise SystemExit(f"train: --init: {args.init} has {name}={saved.get(name)!r}, this "
+                             f"run {name}={getattr(args, name)!r}")
+    model.load_state_dict(weights)
+    return state.get("cpu_seconds", 0.0)
+
+
 def main(argv=None):
     args = parse_args(argv)
     rank, world = init_ranks()
@@ -331,6 +356,8 @@ def main(argv=None):
         gen.setstate(state["gen"][rank])
         torch.set_rng_state(state["torch_rng"])
         cpu0 = state.get("cpu_seconds", 0.0)
+    elif args.init:
+        cpu0 = load_init(model, args)
     model.train()
     start = time.time()
     cpu_start = time.process_time()
