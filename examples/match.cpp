@@ -299,7 +299,7 @@ int main(int argc, char** argv) {
   gimm::MatchOptions options;
   gimm::GeometricOptions geometric;
   gimm::CameraError camera_error;
-  bool segment = false;
+  bool segment = false, exact_vesselness = false;
   std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
   int frame_a = -1, frame_b = -1;
   std::vector<double> isocenter;
@@ -341,6 +341,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--segment", segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
+  app.add_flag("--exact-vesselness", exact_vesselness,
+               "geometric, segmenting: exact Gaussian-derivative kernels (the slow reference path; "
+               "docs/geometric-matcher.md gives both paths' figures)");
   app.add_option("--tree", tree,
                  "single pair with cameras: the matches with their triangulated points (JSON)");
   app.add_option("--tree-vtk", tree_vtk,
@@ -419,6 +422,7 @@ int main(int argc, char** argv) {
                    "cameras), got --geometry "
                        << geometry);
         geometric.use_masks = !segment;
+        geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
         matcher = std::make_unique<gimm::GeometricMatcher>(geometric);
       } else {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);

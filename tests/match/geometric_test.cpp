@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <tuple>
 
 #include "gimm/geometry/carm.hpp"
 #include "gimm/match/geometric.hpp"
@@ -118,12 +119,21 @@ TEST_CASE("Vesselness peaks on a tube's centre, at the scale of its radius", "[m
 }
 
 TEST_CASE("Segmentation: a dark bar found, a flat image empty", "[match][geometric]") {
-  const gimm::Image<std::uint8_t> m = gimm::segment_vessels(bar_image(64, 2.0, 20));
-  int on_bar = 0, off_bar = 0;
-  for (int r = 0; r < 64; ++r)
-    for (int c = 0; c < 64; ++c) (std::abs(r - 20) <= 2 ? on_bar : off_bar) += m(r, c);
-  CHECK(on_bar >= 64 * 3);
-  CHECK(off_bar <= 64 * 2);
+  // Spill beside the bar, in rows: the exact path and the fast one at full resolution 2; the
+  // half-resolution scales (the default fast path) widen the mask by up to 1.5 px per side.
+  for (const auto& [exact, half_from, spill_rows] :
+       {std::tuple{true, 0.0, 2}, std::tuple{false, 0.0, 2}, std::tuple{false, 1.9, 3}}) {
+    gimm::SegmentationOptions o;
+    o.vesselness.exact_derivatives = exact;
+    o.vesselness.half_resolution_from_px = half_from;
+    const gimm::Image<std::uint8_t> m = gimm::segment_vessels(bar_image(64, 2.0, 20), o);
+    int on_bar = 0, off_bar = 0;
+    for (int r = 0; r < 64; ++r)
+      for (int c = 0; c < 64; ++c) (std::abs(r - 20) <= 2 ? on_bar : off_bar) += m(r, c);
+    INFO("exact " << exact << ", half resolution from " << half_from << " px");
+    CHECK(on_bar >= 64 * 3);
+    CHECK(off_bar <= 64 * spill_rows);
+  }
   const gimm::Image<std::uint8_t> flat = gimm::segment_vessels(gimm::Image<float>(32, 32, 0.5f));
   CHECK(std::count(flat.storage().begin(), flat.storage().end(), 1) == 0);
   CHECK_THROWS_WITH(gimm::vesselness(gimm::Image<float>()), Catch::Contains("empty"));

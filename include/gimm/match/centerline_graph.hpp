@@ -60,6 +60,11 @@ inline std::array<int, 2> ring_counts(const Image<std::uint8_t>& m, int r, int c
   return {count, transitions};
 }
 
+/// Ring neighbour k as an offset in a row-major buffer `stride` wide.
+constexpr int kRingOffsetOf(int k, int stride) {
+  return kRing[k][0] * stride + kRing[k][1];
+}
+
 constexpr int kMaxRadiusPx = 32;
 
 /// Distance from (r, c) to the nearest zero pixel of `m` (outside the image counts as zero),
@@ -75,37 +80,70 @@ inline double distance_to_zero(const Image<std::uint8_t>& m, int r, int c) {
 
 }  // namespace detail
 
-/// One-pixel-wide skeleton of a binary mask (nonzero = foreground), Zhang-Suen.
+namespace detail {
+
+/// Zhang-Suen's deletion rule for each 8-neighbourhood (bit k = ring neighbour k lit), one table
+/// per sub-iteration: 2 to 6 neighbours, crossing number 1, and the sub-iteration's N/E/S/W test.
+inline const std::array<std::array<bool, 256>, 2>& zhang_suen_table() {
+  static const std::array<std::array<bool, 256>, 2> table = [] {
+    std::array<std::array<bool, 256>, 2> t{};
+    for (int code = 0; code < 256; ++code) {
+      const auto bit = [code](int k) { return ((code >> (k % 8)) & 1) != 0; };
+      int count = 0, transitions = 0;
+      for (int k = 0; k < 8; ++k) {
+        count += bit(k);
+        transitions += !bit(k) && bit(k + 1);
+      }
+      const bool n = bit(0), e = bit(2), s = bit(4), w = bit(6);
+      const bool shape = count >= 2 && count <= 6 && transitions == 1;
+      t[0][code] = shape && !(n && e && s) && !(e && s && w);
+      t[1][code] = shape && !(n && e && w) && !(n && s && w);
+    }
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace detail
+
+/// One-pixel-wide skeleton of a binary mask (nonzero = foreground), Zhang-Suen. The mask is
+/// copied into a frame one pixel wider (no bounds checks), and each pixel's neighbourhood is
+/// looked up in a 256-entry table.
 template <class T>
 Image<std::uint8_t> thin_mask(const Image<T>& mask) {
-  Image<std::uint8_t> m(mask.rows(), mask.cols(), 0);
-  for (std::size_t i = 0; i < mask.size(); ++i) m.data()[i] = mask.data()[i] != T(0);
+  const int rows = mask.rows(), cols = mask.cols(), stride = cols + 2;
+  std::vector<std::uint8_t> m(static_cast<std::size_t>(rows + 2) * stride, 0);
   // Only foreground pixels can be removed: visit those (a few percent of an angiogram).
-  std::vector<std::array<int, 2>> remove, alive;
-  for (int r = 0; r < m.rows(); ++r)
-    for (int c = 0; c < m.cols(); ++c)
-      if (m(r, c)) alive.push_back({r, c});
+  std::vector<int> alive, remove;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (mask(r, c) != T(0)) {
+        const int i = (r + 1) * stride + c + 1;
+        m[static_cast<std::size_t>(i)] = 1;
+        alive.push_back(i);
+      }
+  std::array<int, 8> offset{};  // kRing as index offsets in the framed buffer
+  for (int k = 0; k < 8; ++k) offset[k] = detail::kRingOffsetOf(k, stride);
+  const auto& table = detail::zhang_suen_table();
   for (bool changed = true; changed;) {
     changed = false;
     for (int pass = 0; pass < 2; ++pass) {
       remove.clear();
-      for (const auto& [r, c] : alive) {
-        const auto [count, transitions] = detail::ring_counts(m, r, c);
-        if (count < 2 || count > 6 || transitions != 1) continue;
-        const bool n = detail::lit(m, r - 1, c), e = detail::lit(m, r, c + 1),
-                   s = detail::lit(m, r + 1, c), w = detail::lit(m, r, c - 1);
-        const bool ok =
-            pass == 0 ? !(n && e && s) && !(e && s && w) : !(n && e && w) && !(n && s && w);
-        if (ok) remove.push_back({r, c});
+      for (int i : alive) {
+        int code = 0;
+        for (int k = 0; k < 8; ++k) code |= m[static_cast<std::size_t>(i + offset[k])] << k;
+        if (table[pass][code]) remove.push_back(i);
       }
-      for (const auto& p : remove) m(p[0], p[1]) = 0;
+      for (int i : remove) m[static_cast<std::size_t>(i)] = 0;
       changed = changed || !remove.empty();
       alive.erase(std::remove_if(alive.begin(), alive.end(),
-                                 [&](const std::array<int, 2>& p) { return !m(p[0], p[1]); }),
+                                 [&](int i) { return !m[static_cast<std::size_t>(i)]; }),
                   alive.end());
     }
   }
-  return m;
+  Image<std::uint8_t> out(rows, cols, 0);
+  for (int i : alive) out.data()[(i / stride - 1) * cols + i % stride - 1] = 1;
+  return out;
 }
 
 /// The centerline graph of a vessel mask (nonzero = vessel).

@@ -32,6 +32,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <optional>
 #include <string>
@@ -69,6 +70,8 @@ struct GeometricOptions {
   bool use_masks = true;      ///< dataset masks when the pair has them; else segment the images
   SegmentationOptions segmentation;  ///< scales are replaced by vessel_scales() of the cameras
   bool scales_from_cameras = true;
+  /// The two views' vessels, then the two matching directions, on two threads (same result).
+  bool two_threads = true;
 };
 
 struct GeometricMatch {
@@ -206,6 +209,17 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
   std::vector<GeometricMatch> out;
   const bool with_intensity = from.image && to.image && o.w_intensity > 0;
   const double tol = o.epipolar_tolerance_px;
+  // Each target chain's bounding box: a line whose signed distance is beyond +-tol at all four
+  // corners cannot cross the chain or pass within tol of it, so the chain is skipped.
+  std::vector<Eigen::Matrix<double, 3, 4>> corners;
+  for (const Branch2d& chain : to.graph.branches) {
+    Eigen::Vector2d lo = chain.points.front(), hi = lo;
+    for (const Eigen::Vector2d& p : chain.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    Eigen::Matrix<double, 3, 4> box;
+    box << lo.x(), hi.x(), lo.x(), hi.x(), lo.y(), lo.y(), hi.y(), hi.y(), 1, 1, 1, 1;
+    corners.push_back(box);
+  }
+  std::vector<double> d;  // signed distances of one chain's points to the current line
   // One candidate set per sample.
   const auto candidates_of = [&](const Eigen::Vector2d& a, double ra, double ia) {
     std::vector<detail::Candidate> cands;
@@ -225,9 +239,11 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       cands.push_back(c);
     };
     for (std::size_t k = 0; k < to.graph.branches.size(); ++k) {
+      const Eigen::RowVector4d at_corners = l.transpose() * corners[k];
+      if (at_corners.minCoeff() > tol || at_corners.maxCoeff() < -tol) continue;
       const Branch2d& chain = to.graph.branches[k];
       const std::size_t m = chain.points.size();
-      std::vector<double> d(m);
+      d.resize(m);
       for (std::size_t j = 0; j < m; ++j) d[j] = l.dot(chain.points[j].homogeneous());
       for (std::size_t j = 0; j < m; ++j) {
         if (j + 1 < m && (d[j] == 0 || (d[j] < 0) != (d[j + 1] < 0))) {
@@ -333,8 +349,12 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
              "0 and no_match_cost >= 0");
   const Eigen::Matrix3d F = fundamental_from_cameras(a.camera, b.camera);
   const Eigen::Vector3d iso = pair_isocentre(a.camera, b.camera);
+  const Eigen::Matrix3d Ft = F.transpose();
+  std::future<std::vector<GeometricMatch>> ba_later =
+      std::async(o.two_threads ? std::launch::async : std::launch::deferred,
+                 [&] { return match_branches_dp(b, a, Ft, iso, o); });
   std::vector<GeometricMatch> ab = match_branches_dp(a, b, F, iso, o);
-  const std::vector<GeometricMatch> ba = match_branches_dp(b, a, F.transpose(), iso, o);
+  const std::vector<GeometricMatch> ba = ba_later.get();
   // Another point claiming the same place: an overlap of two vessels in one view, where a
   // point does not tell which vessel it is on.
   // Matches indexed by where they sit in each view, for the neighbour queries below.
@@ -394,10 +414,14 @@ class GeometricMatcher : public PairMatcher {
     GIMM_CHECK(masks || (pair.image_a && pair.image_b),
                "geometric: pair '" << pair.id << "' has neither masks nor images");
     const Eigen::Vector3d iso = pair_isocentre(*pair.camera_a, *pair.camera_b);
+    std::future<VesselView> b_later =
+        std::async(options_.two_threads ? std::launch::async : std::launch::deferred, [&] {
+          return vessel_view(pair.image_b, masks ? pair.truth->mask_b.get() : nullptr,
+                             *pair.camera_b, iso, options_);
+        });
     const VesselView a = vessel_view(pair.image_a, masks ? pair.truth->mask_a.get() : nullptr,
                                      *pair.camera_a, iso, options_);
-    const VesselView b = vessel_view(pair.image_b, masks ? pair.truth->mask_b.get() : nullptr,
-                                     *pair.camera_b, iso, options_);
+    const VesselView b = b_later.get();
     return geometric_matches(a, b, options_);
   }
   static PairMatches to_pair_matches(const std::string& id, const std::vector<GeometricMatch>& g) {

@@ -1,0 +1,178 @@
+// The fast paths of the vessel segmentation against their slow references: the scale-space
+// vesselness (finite differences, half resolution for wide scales) against sampled Gaussian-
+// derivative kernels, the table-driven thinning against the plain Zhang-Suen rule, and the
+// two-thread geometric matcher against one thread.
+#include <array>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+
+#include "gimm/geometry/carm.hpp"
+#include "gimm/match/geometric.hpp"
+
+namespace {
+
+/// A bright, shaded background with dark bars of radius 1.5, 2.5 and 4 px (horizontal, vertical,
+/// diagonal), and mild noise from a fixed seed: the scales of coronary vessels at 256-512 px.
+gimm::Image<float> bars_scene(int size) {
+  gimm::Image<float> im(size, size);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  for (int r = 0; r < size; ++r)
+    for (int c = 0; c < size; ++c) {
+      float v = 0.8f + 0.1f * float(c) / float(size);
+      if (std::abs(r - 30) <= 1.5) v -= 0.3f;                       // horizontal, radius 1.5
+      if (std::abs(c - 90) <= 2.5) v -= 0.3f;                       // vertical, radius 2.5
+      if (std::abs((r - c) / std::sqrt(2.0f)) <= 4.0f) v -= 0.25f;  // diagonal, radius 4
+      im(r, c) = v + noise(rng);
+    }
+  return im;
+}
+
+double iou(const gimm::Image<std::uint8_t>& a, const gimm::Image<std::uint8_t>& b) {
+  std::size_t both = 0, either = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    both += a.data()[i] && b.data()[i];
+    either += a.data()[i] || b.data()[i];
+  }
+  return either ? double(both) / double(either) : 1.0;
+}
+
+/// The ridge of V across a bar: the row (or column) of the largest response on a line.
+int ridge_row(const gimm::Image<float>& v, int col, int from, int to) {
+  int best = from;
+  for (int r = from; r <= to; ++r)
+    if (v(r, col) > v(best, col)) best = r;
+  return best;
+}
+
+/// Zhang-Suen as the rule reads, with bounds checks: the reference for the table-driven thin_mask.
+gimm::Image<std::uint8_t> thin_reference(gimm::Image<std::uint8_t> m) {
+  const auto lit = [&](int r, int c) { return m.contains(r, c) && m(r, c) != 0; };
+  const std::array<std::array<int, 2>, 8> ring = {
+      {{-1, 0}, {-1, 1}, {0, 1}, {1, 1}, {1, 0}, {1, -1}, {0, -1}, {-1, -1}}};
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int pass = 0; pass < 2; ++pass) {
+      std::vector<std::array<int, 2>> remove;
+      for (int r = 0; r < m.rows(); ++r)
+        for (int c = 0; c < m.cols(); ++c) {
+          if (!m(r, c)) continue;
+          int count = 0, transitions = 0;
+          for (int k = 0; k < 8; ++k) {
+            const bool here = lit(r + ring[k][0], c + ring[k][1]);
+            const bool next = lit(r + ring[(k + 1) % 8][0], c + ring[(k + 1) % 8][1]);
+            count += here;
+            transitions += !here && next;
+          }
+          if (count < 2 || count > 6 || transitions != 1) continue;
+          const bool n = lit(r - 1, c), e = lit(r, c + 1), s = lit(r + 1, c), w = lit(r, c - 1);
+          if (pass == 0 ? !(n && e && s) && !(e && s && w) : !(n && e && w) && !(n && s && w))
+            remove.push_back({r, c});
+        }
+      for (const auto& p : remove) m(p[0], p[1]) = 0;
+      changed = changed || !remove.empty();
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("Fast vesselness agrees with the exact-kernel reference", "[match][vesselness]") {
+  const gimm::Image<float> im = bars_scene(128);
+  gimm::SegmentationOptions fast, full_res, exact;
+  fast.vesselness.scales_px = {1.0, 1.5, 2.0, 3.0};
+  full_res = exact = fast;
+  full_res.vesselness.half_resolution_from_px = 0;
+  exact.vesselness.exact_derivatives = true;
+  const auto v_fast = gimm::vesselness(im, fast.vesselness);
+  const auto v_full = gimm::vesselness(im, full_res.vesselness);
+  const auto v_exact = gimm::vesselness(im, exact.vesselness);
+  // The ridge of every bar is where the reference puts it (the half-resolution path within 1 px).
+  for (int col : {20, 60, 110}) {
+    const int ref = ridge_row(v_exact, col, 24, 36);
+    CHECK(ref == 30);
+    CHECK(ridge_row(v_full, col, 24, 36) == ref);
+    CHECK(std::abs(ridge_row(v_fast, col, 24, 36) - ref) <= 1);
+  }
+  // The masks: measured IoU against the reference 0.92 (full resolution) and 0.86 (half).
+  const auto m_exact = gimm::segment_vessels(im, exact);
+  const double iou_full = iou(gimm::segment_vessels(im, full_res), m_exact);
+  const double iou_fast = iou(gimm::segment_vessels(im, fast), m_exact);
+  INFO("IoU full resolution " << iou_full << ", half resolution " << iou_fast);
+  CHECK(iou_full >= 0.90);
+  CHECK(iou_fast >= 0.85);
+  // Bad settings are named.
+  gimm::VesselnessOptions bad = fast.vesselness;
+  bad.half_resolution_from_px = 0.6;
+  CHECK_THROWS_WITH(gimm::vesselness(im, bad),
+                    Catch::Contains("half_resolution_from_px") && Catch::Contains("0.6"));
+}
+
+TEST_CASE("Table-driven thinning equals the plain Zhang-Suen rule", "[match][vesselness]") {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    // Random thick strokes and blobs, some touching the border.
+    gimm::Image<std::uint8_t> m(48, 40, 0);
+    std::uniform_int_distribution<int> row(-3, 50), col(-3, 42), half(0, 4);
+    for (int k = 0; k < 6; ++k) {
+      const int r0 = row(rng), c0 = col(rng), r1 = row(rng), c1 = col(rng), h = half(rng);
+      for (int s = 0; s <= 60; ++s) {
+        const int r = r0 + (r1 - r0) * s / 60, c = c0 + (c1 - c0) * s / 60;
+        for (int dr = -h; dr <= h; ++dr)
+          for (int dc = -h; dc <= h; ++dc)
+            if (m.contains(r + dr, c + dc)) m(r + dr, c + dc) = 1;
+      }
+    }
+    const auto fast = gimm::thin_mask(m), ref = thin_reference(m);
+    INFO("trial " << trial);
+    CHECK(fast.storage() == ref.storage());
+  }
+}
+
+TEST_CASE("Geometric matcher: two threads give the one-thread result", "[match][vesselness]") {
+  gimm::CArm ga, gb;
+  ga.primary_deg = 30;
+  gb.primary_deg = -30;
+  gb.secondary_deg = 15;
+  for (gimm::CArm* g : {&ga, &gb}) g->rows = g->cols = 128, g->pixel_mm = 2.0;
+  const gimm::Camerad ca = ga.camera(), cb = gb.camera();
+  // Two 3D curves drawn dark into both views, so that the images are segmented and matched.
+  const auto draw = [](const gimm::Camerad& cam) {
+    gimm::Image<float> im(cam.rows(), cam.cols(), 0.9f);
+    for (int k = 0; k <= 2000; ++k) {
+      const double t = k / 2000.0;
+      for (const Eigen::Vector3d& X :
+           {Eigen::Vector3d(-40 + 80 * t, 15 * std::sin(3 * t), 10 * t - 20),
+            Eigen::Vector3d(10 * std::cos(2 * t) - 20, -35 + 70 * t, 25 * t)}) {
+        const Eigen::Vector2d p = cam.project(X).uv;
+        for (int dr = -1; dr <= 1; ++dr)
+          for (int dc = -1; dc <= 1; ++dc) {
+            const int r = int(std::lround(p.y())) + dr, c = int(std::lround(p.x())) + dc;
+            if (im.contains(r, c)) im(r, c) = 0.4f;
+          }
+      }
+    }
+    return im;
+  };
+  const gimm::Image<float> a = draw(ca), b = draw(cb);
+  gimm::PairInput pair;
+  pair.id = "bars";
+  pair.image_a = &a;
+  pair.image_b = &b;
+  pair.camera_a = ca;
+  pair.camera_b = cb;
+  gimm::GeometricOptions one, two;
+  one.two_threads = false;
+  two.two_threads = true;
+  const auto m1 = gimm::GeometricMatcher(one).match_with_points(pair);
+  const auto m2 = gimm::GeometricMatcher(two).match_with_points(pair);
+  REQUIRE(m1.size() >= 10);
+  REQUIRE(m1.size() == m2.size());
+  for (std::size_t i = 0; i < m1.size(); ++i) {
+    CHECK(m1[i].a == m2[i].a);
+    CHECK(m1[i].b == m2[i].b);
+    CHECK(m1[i].confidence == m2[i].confidence);
+  }
+}
