@@ -1,7 +1,7 @@
-// The fast paths of the vessel segmentation against their slow references: the scale-space
-// vesselness (finite differences, half resolution for wide scales) against sampled Gaussian-
-// derivative kernels, the table-driven thinning against the plain Zhang-Suen rule, and the
-// two-thread geometric matcher against one thread.
+// The fast paths of the vessel segmentation against their slow references: the float,
+// vectorised vesselness (half resolution for wide scales) against the double-precision kernels,
+// the table-driven thinning against the plain Zhang-Suen rule, and the two-thread geometric
+// matcher against one thread.
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -96,12 +96,13 @@ TEST_CASE("Fast vesselness agrees with the exact-kernel reference", "[match][ves
     CHECK(ridge_row(v_full, col, 24, 36) == ref);
     CHECK(std::abs(ridge_row(v_fast, col, 24, 36) - ref) <= 1);
   }
-  // The masks: measured IoU against the reference 0.92 (full resolution) and 0.86 (half).
+  // The masks: measured IoU against the reference 1.0 at full resolution (the same kernels in
+  // float) and 0.87 with the wide scales at half resolution.
   const auto m_exact = gimm::segment_vessels(im, exact);
   const double iou_full = iou(gimm::segment_vessels(im, full_res), m_exact);
   const double iou_fast = iou(gimm::segment_vessels(im, fast), m_exact);
   INFO("IoU full resolution " << iou_full << ", half resolution " << iou_fast);
-  CHECK(iou_full >= 0.90);
+  CHECK(iou_full >= 0.99);
   CHECK(iou_fast >= 0.85);
   // Bad settings are named.
   gimm::VesselnessOptions bad = fast.vesselness;

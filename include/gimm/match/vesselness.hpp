@@ -15,14 +15,15 @@
 /// in mm to scales through the detector's magnification, so the same settings serve 256 and 512 px
 /// images.
 ///
-/// Two ways to the Hessian at each scale (VesselnessOptions::exact_derivatives):
-/// - fast (the default): a scale space built by blurring each scale's image from the previous
-///   one (sigma increments sqrt(s_k^2 - s_{k-1}^2), so kernels stay short), float and
-///   border-padded so the loops vectorise, then 3-point differences. A difference of a blurred
-///   image is the Gaussian derivative of a slightly larger scale; the tests bound what this
-///   changes against the exact path.
-/// - exact (the reference): separable sampled Gaussian-derivative kernels per scale, in double.
+/// Two ways to the Hessian at each scale (VesselnessOptions::exact_derivatives), with the same
+/// sampled Gaussian-derivative kernels:
+/// - fast (the default): float, border-padded passes whose loops vectorise, and scales of
+///   half_resolution_from_px and more on the image averaged over 2x2 blocks;
+/// - exact (the reference): double, every scale at full resolution.
+/// (3-point differences of a blurred image were tried first: 2x cheaper again, but they cost the
+/// segmented geometric matcher 0.06 Prec@3px on 24 held-out phantoms.)
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -142,63 +143,68 @@ inline std::vector<ScaleEigen> eigen_exact(const Image<float>& image,
   return out;
 }
 
-/// Gaussian blur of `image` at `sigma` in place, in float, borders replicated: rows through a
-/// padded line buffer, columns as weighted sums of whole rows (both inner loops run along
-/// contiguous memory, so they vectorise). `scratch` is reused between calls.
-inline void blur_in_place(Image<float>& image, double sigma, Image<float>& scratch) {
-  const std::vector<double> k64 = gaussian_kernel(sigma, 0);
-  const std::vector<float> k(k64.begin(), k64.end());
-  const int half = static_cast<int>(k.size() / 2), rows = image.rows(), cols = image.cols();
-  if (scratch.rows() != rows || scratch.cols() != cols) scratch = Image<float>(rows, cols);
+/// Convolution along x (each row) with `kernel` (odd length), in float, borders replicated,
+/// through a padded line buffer: the inner loop runs along contiguous memory and vectorises.
+inline void convolve_rows(const Image<float>& in, const std::vector<float>& kernel,
+                          Image<float>& out) {
+  const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
+  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
   std::vector<float> line(static_cast<std::size_t>(cols + 2 * half));
-  for (int r = 0; r < rows; ++r) {  // image -> scratch, along x
-    const float* src = image.data() + static_cast<std::size_t>(r) * cols;
+  for (int r = 0; r < rows; ++r) {
+    const float* src = in.data() + static_cast<std::size_t>(r) * cols;
     std::fill(line.begin(), line.begin() + half, src[0]);
     std::copy(src, src + cols, line.begin() + half);
     std::fill(line.begin() + half + cols, line.end(), src[cols - 1]);
-    float* dst = scratch.data() + static_cast<std::size_t>(r) * cols;
+    float* dst = out.data() + static_cast<std::size_t>(r) * cols;
     std::fill(dst, dst + cols, 0.0f);
-    for (std::size_t j = 0; j < k.size(); ++j)
-      for (int c = 0; c < cols; ++c) dst[c] += k[j] * line[j + static_cast<std::size_t>(c)];
+    // out(c) = sum_k K[k] in(c - k): tap j of the line is in(c + j - half), weight K[half - j].
+    for (std::size_t j = 0; j < kernel.size(); ++j) {
+      const float w = kernel[kernel.size() - 1 - j];
+      for (int c = 0; c < cols; ++c) dst[c] += w * line[j + static_cast<std::size_t>(c)];
+    }
   }
-  for (int r = 0; r < rows; ++r) {  // scratch -> image, along y
-    float* dst = image.data() + static_cast<std::size_t>(r) * cols;
+}
+
+/// Convolution along y (each column) as weighted sums of whole rows, borders replicated.
+inline void convolve_cols(const Image<float>& in, const std::vector<float>& kernel,
+                          Image<float>& out) {
+  const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
+  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
+  for (int r = 0; r < rows; ++r) {
+    float* dst = out.data() + static_cast<std::size_t>(r) * cols;
     std::fill(dst, dst + cols, 0.0f);
-    for (int j = -half; j <= half; ++j) {
-      const float w = k[static_cast<std::size_t>(j + half)];
+    for (int k = -half; k <= half; ++k) {
+      const float w = kernel[static_cast<std::size_t>(k + half)];
       const float* src =
-          scratch.data() + static_cast<std::size_t>(std::clamp(r + j, 0, rows - 1)) * cols;
+          in.data() + static_cast<std::size_t>(std::clamp(r - k, 0, rows - 1)) * cols;
       for (int c = 0; c < cols; ++c) dst[c] += w * src[c];
     }
   }
 }
 
-/// Fast: an incremental scale space and 3-point second differences (borders replicated),
-/// turned into eigenvalues as they are made.
-inline std::vector<ScaleEigen> eigen_fast(const Image<float>& image, std::vector<double> scales) {
-  std::sort(scales.begin(), scales.end());
+/// Fast: the reference's sampled Gaussian-derivative kernels, applied in float by the
+/// vectorising passes above (three row passes shared by the three second derivatives).
+inline std::vector<ScaleEigen> eigen_fast(const Image<float>& image,
+                                          const std::vector<double>& scales) {
   std::vector<ScaleEigen> out;
   const int rows = image.rows(), cols = image.cols();
-  Image<float> blurred = image, scratch;
-  double reached = 0;
+  std::array<Image<float>, 3> along_x;  // the image convolved along x with G, G', G''
+  Image<float> xx, xy, yy;
   for (double s : scales) {
-    if (s > reached) blur_in_place(blurred, std::sqrt(s * s - reached * reached), scratch);
-    reached = s;
-    const float n = static_cast<float>(s * s);
-    ScaleEigen e{Image<float>(rows, cols), Image<float>(rows, cols)};
-    for (int r = 0; r < rows; ++r) {
-      const auto row = [&](int i) { return blurred.data() + static_cast<std::size_t>(i) * cols; };
-      const float *up = row(std::max(r - 1, 0)), *mid = row(r),
-                  *down = row(std::min(r + 1, rows - 1));
-      float* l1 = e.l1.data() + static_cast<std::size_t>(r) * cols;
-      float* l2 = e.l2.data() + static_cast<std::size_t>(r) * cols;
-      for (int c = 0; c < cols; ++c) {
-        const int left = std::max(c - 1, 0), right = std::min(c + 1, cols - 1);
-        eigen_2x2(n * (mid[right] - 2 * mid[c] + mid[left]),
-                  n * 0.25f * (down[right] - down[left] - up[right] + up[left]),
-                  n * (down[c] - 2 * mid[c] + up[c]), l1[c], l2[c]);
-      }
+    std::array<std::vector<float>, 3> g;
+    for (int order = 0; order < 3; ++order) {
+      const std::vector<double> k = gaussian_kernel(s, order);
+      g[static_cast<std::size_t>(order)].assign(k.begin(), k.end());
     }
+    for (std::size_t order = 0; order < 3; ++order) convolve_rows(image, g[order], along_x[order]);
+    convolve_cols(along_x[2], g[0], xx);
+    convolve_cols(along_x[1], g[1], xy);
+    convolve_cols(along_x[0], g[2], yy);
+    ScaleEigen e{Image<float>(rows, cols), Image<float>(rows, cols)};
+    const float n = static_cast<float>(s * s);
+    for (std::size_t i = 0; i < image.size(); ++i)
+      eigen_2x2(n * xx.data()[i], n * xy.data()[i], n * yy.data()[i], e.l1.data()[i],
+                e.l2.data()[i]);
     out.push_back(std::move(e));
   }
   return out;
