@@ -229,6 +229,10 @@ class Matcher:
               snap_to_epipolar: bool = False) -> Dict[str, Any]: ...
 
 
+def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraLike,
+                    camera_b: _CameraLike, *, mask_a: Optional[np.ndarray] = None,
+                    mask_b: Optional[np.ndarray] = None, tolerance_px: float = 3.0,
+                    exact_vesselness: bool = False) -> Dict[str, Any]: ...
 def evaluate(truth: Union[Mapping[str, Any], Sequence[Mapping[str, Any]]],
              predictions: Union[Mapping[str, Any], Sequence[Optional[Mapping[str, Any]]]],
              top_k: int = 20, radius_px: float = 3.0) -> Dict[str, Any]: ...

@@ -1,6 +1,7 @@
 """Anatomy, labels, the learned matcher and the evaluation from Python, against gimm-match and
 gimm-eval where they are built."""
 import json
+import os
 import unittest
 
 import numpy as np
@@ -136,21 +137,26 @@ class Matching(unittest.TestCase):
         self.assertGreater(pooled["scored"], 0)
         self.assertTrue(np.isfinite(pooled["mean_px"]) and np.isfinite(pooled["prec_3px"]))
 
-    def test_same_matches_as_gimm_match(self):
-        drr, match = cli("gimm-drr"), cli("gimm-match")
-        if drr is None or match is None:
+    def rendered_pair(self):
+        """gimm-drr's two views of the phantom: their file prefixes (PNG, camera JSON)."""
+        drr = cli("gimm-drr")
+        if drr is None or cli("gimm-match") is None:
             self.skipTest("gimm-drr / gimm-match not built")
+        prefixes = [tmp_path("match", name) for name in ("a", "b")]
+        if all(os.path.exists(prefix + ".camera.json") for prefix in prefixes):
+            return prefixes
         p = phantom()
         hu, label = tmp_path("match", "hu.nii.gz"), tmp_path("match", "label.nii.gz")
         gimm.write_nifti(hu, p["hu"], p["geometry"])
         gimm.write_nifti(label, p["label"], p["geometry"])
-        prefixes = []
-        for name, (primary, secondary) in (("a", VIEW_A), ("b", VIEW_B)):
-            prefix = tmp_path("match", name)
+        for prefix, (primary, secondary) in zip(prefixes, (VIEW_A, VIEW_B)):
             run(drr, "--volume", hu, "--label", label, "--system", "LCA", "--primary", primary,
                 "--secondary", secondary, "--rows", 128, "--cols", 128, "--pixel", 2, "--out",
                 prefix, "--quiet")
-            prefixes.append(prefix)
+        return prefixes
+
+    def test_same_matches_as_gimm_match(self):
+        prefixes, match = self.rendered_pair(), cli("gimm-match")
         out = tmp_path("match", "matches.json")
         run(match, "--image-a", prefixes[0] + ".png", "--image-b", prefixes[1] + ".png",
             "--class-a", 8, "--class-b", 10, "--camera-a", prefixes[0] + ".camera.json",
@@ -165,6 +171,53 @@ class Matching(unittest.TestCase):
             np.testing.assert_allclose(mine[key], reference[key], rtol=1e-12, atol=1e-12,
                                        err_msg=key)
         self.assertEqual(reference["F_source"], mine["F_source"])
+
+    def test_geometric_same_matches_as_gimm_match(self):
+        prefixes, match = self.rendered_pair(), cli("gimm-match")
+        images = [gimm.read_png(prefix + ".png") for prefix in prefixes]
+        cameras = [gimm.read_camera(prefix + ".camera.json") for prefix in prefixes]
+        for extra in ([], ["--exact-vesselness"]):
+            out = tmp_path("match", "geometric.json")
+            run(match, "--method", "geometric", "--image-a", prefixes[0] + ".png", "--image-b",
+                prefixes[1] + ".png", "--camera-a", prefixes[0] + ".camera.json", "--camera-b",
+                prefixes[1] + ".camera.json", "--out", out, *extra)
+            reference = gimm.read_matches(out)
+            mine = gimm.match_geometric(*images, *cameras, exact_vesselness=bool(extra))
+            self.assertGreater(len(reference["confidence"]), 10, extra)
+            for key in ("points_a", "points_b", "confidence", "F"):
+                np.testing.assert_allclose(mine[key], reference[key], rtol=1e-12, atol=1e-12,
+                                           err_msg=f"{key} {extra}")
+            self.assertEqual(mine["F_source"], "cameras")
+            # The triangulated points reproject onto both matched pixels (within the tolerance).
+            world = mine["world_mm"]
+            self.assertEqual(world.shape, (len(mine["confidence"]), 3))
+            for camera, key in zip(cameras, ("points_a", "points_b")):
+                homog = np.c_[world, np.ones(len(world))] @ np.asarray(camera.P).T
+                reprojected = homog[:, :2] / homog[:, 2:]
+                self.assertLess(np.median(np.linalg.norm(reprojected - mine[key], axis=1)), 1.5)
+
+    def test_geometric_masks_and_bad_input(self):
+        a, b = carm(*VIEW_A), carm(*VIEW_B)
+        rendered = [renderer().render(camera) for camera in (a, b)]
+        found = gimm.match_geometric(rendered[0]["intensity"], rendered[1]["intensity"], a, b,
+                                     mask_a=rendered[0]["vessel_mask"],
+                                     mask_b=rendered[1]["vessel_mask"])
+        self.assertGreater(len(found["confidence"]), 10)
+        # With masks every A point lies on A's vessel mask.
+        mask = rendered[0]["vessel_mask"]
+        cols, rows = np.rint(found["points_a"]).astype(int).T
+        self.assertTrue(np.all(mask[rows, cols] != 0))
+        image = rendered[0]["intensity"]
+        with self.assertRaisesRegex(ValueError, "both mask_a and mask_b, or neither"):
+            gimm.match_geometric(image, image, a, b, mask_a=mask)
+        small = np.ones((32, 32), np.float32)
+        with self.assertRaisesRegex(gimm.Error, "32 x 32"):
+            gimm.match_geometric(small, small, a, b)
+        with self.assertRaisesRegex(gimm.Error, "tolerance"):
+            gimm.match_geometric(image, image, a, b, tolerance_px=0.0)
+        empty = gimm.match_geometric(np.full(image.shape, 0.8, np.float32),
+                                     np.full(image.shape, 0.8, np.float32), a, b)
+        self.assertEqual(empty["points_a"].shape, (0, 2))
 
     def test_same_scores_as_gimm_eval(self):
         a, b = carm(*VIEW_A), carm(*VIEW_B)
