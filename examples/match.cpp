@@ -19,7 +19,8 @@
 // relative to A's; view classes from the angles unless --class-a/b; real C-arm geometry is off
 // by a few px, so the gate (--delta) and the geometric tolerance default to 5 px there.
 // Dataset mode, any method using cameras: --camera-error-deg D --camera-error-mm M give the
-// matcher cameras off by D degrees and M mm (geometry/camera_error.hpp), for stability sweeps.
+// matcher cameras off by D degrees and M mm (geometry/camera_error.hpp), for stability sweeps;
+// --noise-photons N --blur-px S degrade the images the matcher sees (render/image_degradation.hpp).
 // The geometric matcher (match/geometric.hpp) needs the cameras; it uses the dataset's vessel
 // masks unless --segment, and segments the images itself in the single-pair mode.
 // Without --weights the shipped weights are used (weights/README.md), at the input size they
@@ -52,6 +53,7 @@
 #include "gimm/match/matches.hpp"
 #include "gimm/match/reconstruct.hpp"
 #include "gimm/nn/matcher_file.hpp"
+#include "gimm/render/image_degradation.hpp"
 
 namespace {
 
@@ -124,7 +126,8 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
 std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
                         const std::vector<std::string>& ids, bool use_cameras,
                         const std::filesystem::path& pred_dir,
-                        const gimm::CameraError& camera_error, std::uint64_t seed) {
+                        const gimm::CameraError& camera_error,
+                        const gimm::ImageDegradation& degradation, std::uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
   std::size_t total = 0;
   for (std::size_t n = 0; n < ids.size(); ++n) {
@@ -140,6 +143,11 @@ std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& r
     if (matcher.needs_images()) {
       a = gimm::read_png_unit(layout.view_image(patient, truth.view_a));
       b = gimm::read_png_unit(layout.view_image(patient, truth.view_b));
+      if (!degradation.none()) {  // what the matcher sees is degraded, the truth is not
+        gimm::Rng rng = gimm::baseline_stream(seed, "image-degradation", ids[n]);
+        a = gimm::degrade_image(a, degradation, rng);
+        b = gimm::degrade_image(b, degradation, rng);
+      }
       input.image_a = &a;
       input.image_b = &b;
     }
@@ -168,7 +176,8 @@ std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& r
 /// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
 int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
                   const std::string& split, bool use_cameras, const std::string& out,
-                  const gimm::CameraError& camera_error, std::uint64_t seed) {
+                  const gimm::CameraError& camera_error, const gimm::ImageDegradation& degradation,
+                  std::uint64_t seed) {
   gimm::DatasetReader reader(dataset);
   const auto ids = reader.pair_ids(split);
   GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
@@ -177,7 +186,8 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
   // (a full disk) leaves `out` as it was.
   try {
     gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
-      total = match_pairs(matcher, reader, ids, use_cameras, staged, camera_error, seed);
+      total =
+          match_pairs(matcher, reader, ids, use_cameras, staged, camera_error, degradation, seed);
     });
   } catch (...) {
     std::fprintf(stderr, "\n");  // the progress line ends before the error is printed
@@ -299,6 +309,7 @@ int main(int argc, char** argv) {
   gimm::MatchOptions options;
   gimm::GeometricOptions geometric;
   gimm::CameraError camera_error;
+  gimm::ImageDegradation degradation;
   bool segment = false, exact_vesselness = false;
   std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
   int frame_a = -1, frame_b = -1;
@@ -338,6 +349,13 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--camera-error-mm", camera_error.mm,
                  "dataset mode: shift each view's camera by this many mm (random direction)")
+      ->capture_default_str();
+  app.add_option("--noise-photons", degradation.photons,
+                 "dataset mode: Poisson noise on the images the matcher sees, photons per "
+                 "unattenuated pixel (render/image_degradation.hpp; 0 = none)")
+      ->capture_default_str();
+  app.add_option("--blur-px", degradation.blur_px,
+                 "dataset mode: Gaussian blur of the images the matcher sees, sigma px (0 = none)")
       ->capture_default_str();
   app.add_flag("--segment", segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
@@ -434,10 +452,17 @@ int main(int argc, char** argv) {
       }
       GIMM_CHECK(camera_error.none() || geometry == "cameras",
                  "--camera-error-deg/-mm perturb the cameras: they need --geometry cameras");
+      degradation.validate();
+      GIMM_CHECK(degradation.none() || matcher->needs_images(),
+                 "--noise-photons/--blur-px degrade the images, and --method "
+                     << method << " does not look at them");
       return match_dataset(*matcher, dataset, split, geometry == "cameras", out, camera_error,
-                           seed);
+                           degradation, seed);
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
+    for (const char* flag :
+         {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px"})
+      GIMM_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
     for (const auto& [flag, frame] : {std::pair{"--frame-a", frame_a}, {"--frame-b", frame_b}})
       GIMM_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
     GIMM_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,

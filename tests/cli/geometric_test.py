@@ -41,6 +41,20 @@ check(geo["mean_px"] <= epi["mean_px"] - 2.0,
       f"geometric 2D mean {geo['mean_px']:.2f} px not 2 px below epipolar's {epi['mean_px']:.2f}")
 check(geo["coverage"] >= 0.8, f"geometric coverage {geo['coverage']:.3f} < 0.8")
 
+# Degraded images (--noise-photons, --blur-px): the matcher sees them, the truth does not; the
+# same seed gives the same predictions.
+segmented = {}
+for name, flags in (("clean", []), ("noisy0", ["--noise-photons", 300, "--blur-px", 1.0]),
+                    ("noisy1", ["--noise-photons", 300, "--blur-px", 1.0])):
+    pred = os.path.join(TMP, "pred-segmented-" + name)
+    run("gimm-match", "--dataset", ds, "--method", "geometric", "--segment",
+        *flags, "--out", pred)
+    with open(os.path.join(pred, "phantom-0000", "LCA_00-01.json")) as f:
+        segmented[name] = json.load(f)
+check(segmented["noisy0"] == segmented["noisy1"], "--noise-photons: two runs with one seed differ")
+check(segmented["noisy0"]["points_a"] != segmented["clean"]["points_a"],
+      "--noise-photons/--blur-px changed nothing the segmented matcher found")
+
 # One pair from what a real user has: images and cameras (the matcher segments the vessels).
 views = os.path.join(ds, "patients", "phantom-0000", "views")
 A, B = os.path.join(views, "LCA_00.png"), os.path.join(views, "LCA_01.png")
@@ -76,6 +90,11 @@ cases = [
     ("camera size", [*pair[:-2], "--camera-b", other], "128 x 128"),
     ("tree without cameras", ["--image-a", A, "--image-b", B, "--tree",
                               os.path.join(TMP, "t.json")], "give --camera-a/b"),
+    ("noise on one pair", [*pair, "--noise-photons", 100], "--noise-photons is for the dataset"),
+    ("camera error on one pair", [*pair, "--camera-error-mm", 2], "--camera-error-mm is for"),
+    ("noise for a matcher without images", ["--dataset", ds, "--method", "epipolar",
+                                            "--blur-px", 1], "does not look at them"),
+    ("photons below 1", ["--dataset", ds, "--noise-photons", 0.5], "got 0.5"),
 ]
 for name, args, needle in cases:
     out = os.path.join(TMP, f"bad_{name.replace(' ', '_')}.json")

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/filter.hpp"
 #include "gimm/core/image.hpp"
 
 namespace gimm {
@@ -69,22 +70,6 @@ inline std::vector<double> vessel_scales(double px_per_mm, const std::vector<dou
 }
 
 namespace detail {
-
-/// Sampled Gaussian derivative of order 0, 1 or 2 at sigma, truncated at 4 sigma.
-inline std::vector<double> gaussian_kernel(double sigma, int order) {
-  const int half = static_cast<int>(std::ceil(4 * sigma));
-  std::vector<double> k(static_cast<std::size_t>(2 * half + 1));
-  double sum = 0;
-  for (int x = -half; x <= half; ++x) sum += std::exp(-0.5 * x * x / (sigma * sigma));
-  for (int x = -half; x <= half; ++x) {
-    const double g = std::exp(-0.5 * x * x / (sigma * sigma)) / sum;
-    const double s2 = sigma * sigma;
-    k[static_cast<std::size_t>(x + half)] = order == 0   ? g
-                                            : order == 1 ? -x / s2 * g
-                                                         : (x * x - s2) / (s2 * s2) * g;
-  }
-  return k;
-}
 
 /// Separable convolution: `along_cols` runs along each row (x = u), `along_rows` along each
 /// column (y = v); borders replicate the edge pixel.
@@ -141,45 +126,6 @@ inline std::vector<ScaleEigen> eigen_exact(const Image<float>& image,
     out.push_back(std::move(e));
   }
   return out;
-}
-
-/// Convolution along x (each row) with `kernel` (odd length), in float, borders replicated,
-/// through a padded line buffer: the inner loop runs along contiguous memory and vectorises.
-inline void convolve_rows(const Image<float>& in, const std::vector<float>& kernel,
-                          Image<float>& out) {
-  const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
-  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
-  std::vector<float> line(static_cast<std::size_t>(cols + 2 * half));
-  for (int r = 0; r < rows; ++r) {
-    const float* src = in.data() + static_cast<std::size_t>(r) * cols;
-    std::fill(line.begin(), line.begin() + half, src[0]);
-    std::copy(src, src + cols, line.begin() + half);
-    std::fill(line.begin() + half + cols, line.end(), src[cols - 1]);
-    float* dst = out.data() + static_cast<std::size_t>(r) * cols;
-    std::fill(dst, dst + cols, 0.0f);
-    // out(c) = sum_k K[k] in(c - k): tap j of the line is in(c + j - half), weight K[half - j].
-    for (std::size_t j = 0; j < kernel.size(); ++j) {
-      const float w = kernel[kernel.size() - 1 - j];
-      for (int c = 0; c < cols; ++c) dst[c] += w * line[j + static_cast<std::size_t>(c)];
-    }
-  }
-}
-
-/// Convolution along y (each column) as weighted sums of whole rows, borders replicated.
-inline void convolve_cols(const Image<float>& in, const std::vector<float>& kernel,
-                          Image<float>& out) {
-  const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
-  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
-  for (int r = 0; r < rows; ++r) {
-    float* dst = out.data() + static_cast<std::size_t>(r) * cols;
-    std::fill(dst, dst + cols, 0.0f);
-    for (int k = -half; k <= half; ++k) {
-      const float w = kernel[static_cast<std::size_t>(k + half)];
-      const float* src =
-          in.data() + static_cast<std::size_t>(std::clamp(r - k, 0, rows - 1)) * cols;
-      for (int c = 0; c < cols; ++c) dst[c] += w * src[c];
-    }
-  }
 }
 
 /// Fast: the reference's sampled Gaussian-derivative kernels, applied in float by the
