@@ -108,22 +108,24 @@ inline void eigen_2x2(float xx, float xy, float yy, float& l1, float& l2) {
   if (std::abs(l1) > std::abs(l2)) std::swap(l1, l2);
 }
 
+/// The eigenvalues of the Hessian (xx, xy, yy) at scale s, s^2-normalised.
+inline ScaleEigen scale_eigen(const Image<float>& xx, const Image<float>& xy,
+                              const Image<float>& yy, double s) {
+  ScaleEigen e{Image<float>(xx.rows(), xx.cols()), Image<float>(xx.rows(), xx.cols())};
+  const float n = static_cast<float>(s * s);
+  for (std::size_t i = 0; i < xx.size(); ++i)
+    eigen_2x2(n * xx.data()[i], n * xy.data()[i], n * yy.data()[i], e.l1.data()[i], e.l2.data()[i]);
+  return e;
+}
+
 /// Reference: sampled Gaussian-derivative kernels, one set per scale.
 inline std::vector<ScaleEigen> eigen_exact(const Image<float>& image,
                                            const std::vector<double>& scales) {
   std::vector<ScaleEigen> out;
   for (double s : scales) {
     const auto g0 = gaussian_kernel(s, 0), g1 = gaussian_kernel(s, 1), g2 = gaussian_kernel(s, 2);
-    const Image<float> xx = convolve_separable(image, g2, g0),
-                       xy = convolve_separable(image, g1, g1),
-                       yy = convolve_separable(image, g0, g2);
-    ScaleEigen e{Image<float>(image.rows(), image.cols()),
-                 Image<float>(image.rows(), image.cols())};
-    const float n = static_cast<float>(s * s);
-    for (std::size_t i = 0; i < image.size(); ++i)
-      eigen_2x2(n * xx.data()[i], n * xy.data()[i], n * yy.data()[i], e.l1.data()[i],
-                e.l2.data()[i]);
-    out.push_back(std::move(e));
+    out.push_back(scale_eigen(convolve_separable(image, g2, g0), convolve_separable(image, g1, g1),
+                              convolve_separable(image, g0, g2), s));
   }
   return out;
 }
@@ -133,7 +135,6 @@ inline std::vector<ScaleEigen> eigen_exact(const Image<float>& image,
 inline std::vector<ScaleEigen> eigen_fast(const Image<float>& image,
                                           const std::vector<double>& scales) {
   std::vector<ScaleEigen> out;
-  const int rows = image.rows(), cols = image.cols();
   std::array<Image<float>, 3> along_x;  // the image convolved along x with G, G', G''
   Image<float> xx, xy, yy;
   for (double s : scales) {
@@ -146,12 +147,7 @@ inline std::vector<ScaleEigen> eigen_fast(const Image<float>& image,
     convolve_cols(along_x[2], g[0], xx);
     convolve_cols(along_x[1], g[1], xy);
     convolve_cols(along_x[0], g[2], yy);
-    ScaleEigen e{Image<float>(rows, cols), Image<float>(rows, cols)};
-    const float n = static_cast<float>(s * s);
-    for (std::size_t i = 0; i < image.size(); ++i)
-      eigen_2x2(n * xx.data()[i], n * xy.data()[i], n * yy.data()[i], e.l1.data()[i],
-                e.l2.data()[i]);
-    out.push_back(std::move(e));
+    out.push_back(scale_eigen(xx, xy, yy, s));
   }
   return out;
 }
