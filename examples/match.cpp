@@ -421,6 +421,26 @@ int main(int argc, char** argv) {
       options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
       return network;
     };
+    // A flag of one method given to another would be silently ignored: refuse it instead.
+    const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
+                                                                {"--segment", "geometric"},
+                                                                {"--exact-vesselness", "geometric"},
+                                                                {"--sigma", "oracle"},
+                                                                {"--max-points", "epipolar"},
+                                                                {"--gate", "learned"},
+                                                                {"--tau", "learned"},
+                                                                {"--delta", "learned"},
+                                                                {"--snap", "learned"},
+                                                                {"--input-size", "learned"},
+                                                                {"--max-reprojection", "learned"},
+                                                                {"--class-a", "learned"},
+                                                                {"--class-b", "learned"}};
+    for (const auto& [flag, owner] : method_flags)
+      GIMM_CHECK(app.count(flag) == 0 || method == owner,
+                 flag << " is for --method " << owner << ", not " << method);
+    GIMM_CHECK(app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
+               "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
+               "(without it the matcher uses the vessel masks)");
     if (!dataset.empty()) {
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
                      dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&

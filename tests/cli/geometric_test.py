@@ -95,6 +95,17 @@ cases = [
     ("noise for a matcher without images", ["--dataset", ds, "--method", "epipolar",
                                             "--blur-px", 1], "does not look at them"),
     ("photons below 1", ["--dataset", ds, "--noise-photons", 0.5], "got 0.5"),
+    # Flags the chosen matcher would ignore are refused, naming the flag and its method.
+    ("noise for the geometric matcher on masks", ["--dataset", ds, "--method", "geometric",
+                                                  "--noise-photons", 300], "does not look at them"),
+    ("exact vesselness on masks", ["--dataset", ds, "--method", "geometric",
+                                   "--exact-vesselness"], "it needs --segment"),
+    ("segment for the learned matcher", ["--dataset", ds, "--segment"],
+     "--segment is for --method geometric, not learned"),
+    ("tolerance for the epipolar baseline", ["--dataset", ds, "--method", "epipolar",
+                                             "--tolerance", 3], "--tolerance is for --method geometric"),
+    ("gate for the geometric matcher", [*pair, "--delta", 5], "--delta is for --method learned"),
+    ("sigma for the learned matcher", ["--dataset", ds, "--sigma", 2], "--sigma is for --method oracle"),
 ]
 for name, args, needle in cases:
     out = os.path.join(TMP, f"bad_{name.replace(' ', '_')}.json")

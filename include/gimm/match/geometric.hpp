@@ -404,6 +404,8 @@ class GeometricMatcher : public PairMatcher {
  public:
   explicit GeometricMatcher(GeometricOptions options = {}) : options_(options) {}
   std::string name() const override { return "geometric"; }
+  // With masks it reads only them; segmenting, it reads the images.
+  bool needs_images() const override { return !options_.use_masks; }
   PairMatches match(const PairInput& pair) const override {
     return to_pair_matches(pair.id, match_with_points(pair));
   }
