@@ -2,7 +2,8 @@
 // training-free baselines in dataset mode).
 //   gimm-match --image-a A.png --image-b B.png [--weights W.safetensors]
 //              [--class-a ID --class-b ID] [--camera-a A.json --camera-b B.json]
-//              [--gate hard|soft|logit|none] [--tau PX] [--delta PX] [--input-size N]
+//              [--gate hard|soft|logit|none] [--tau PX] [--delta PX] [--snap] [--input-size N]
+//              [--threshold C]
 //              [--pair ID] [--out matches.json] [--picture pair.png]
 //   gimm-match --dataset DIR [--weights W.safetensors] --out PRED_DIR [--split all|train|val|test]
 //              [--geometry cameras|matches] [--gate ...]
@@ -315,6 +316,7 @@ int main(int argc, char** argv) {
   int frame_a = -1, frame_b = -1;
   std::vector<double> isocenter;
   double max_reprojection = 0;
+  float threshold = 0;
   app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
   app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
   app.add_option("--dataset", dataset, "match every pair of this gimm-dataset (--out: a folder)")
@@ -399,6 +401,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--delta", options.gate.delta_px, "hard gate threshold, px")
       ->capture_default_str();
+  auto* threshold_flag =
+      app.add_option("--threshold", threshold,
+                     "learned: coarse confidence a match needs, in [0, 1) (default: the value "
+                     "the weights record)");
   app.add_flag("--snap", options.snap_to_epipolar,
                "move each B point onto its epipolar line after gating (needs a gate)");
   auto* input_size_flag = app.add_option(
@@ -417,6 +423,7 @@ int main(int argc, char** argv) {
     const auto load_network = [&] {
       if (weights.empty()) weights = gimm::cli::default_weights();
       gimm::nn::Matcher network = gimm::nn::load_matcher(weights);
+      if (threshold_flag->count()) network.set_threshold(threshold);
       GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
       options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
       return network;
@@ -431,6 +438,7 @@ int main(int argc, char** argv) {
                                                                 {"--tau", "learned"},
                                                                 {"--delta", "learned"},
                                                                 {"--snap", "learned"},
+                                                                {"--threshold", "learned"},
                                                                 {"--input-size", "learned"},
                                                                 {"--max-reprojection", "learned"},
                                                                 {"--class-a", "learned"},

@@ -101,6 +101,13 @@ class Matcher {
   }
 
   const MatcherConfig& config() const { return config_; }
+  /// The coarse confidence a match needs (the weights record the value they were trained with;
+  /// a lower one gives the epipolar gate more candidates to keep).
+  void set_threshold(float threshold) {
+    GIMM_CHECK(std::isfinite(threshold) && threshold >= 0 && threshold < 1,
+               "matcher: threshold must be in [0, 1), got " << threshold);
+    config_.threshold = threshold;
+  }
   /// Every tensor name the model read (the loader rejects files with others).
   const std::vector<std::string>& tensor_names() const { return names_; }
 
