@@ -6,6 +6,7 @@
 #include <gdcmWriter.h>
 
 #include <catch2/catch.hpp>
+#include <cctype>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -415,6 +416,70 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
   const auto f = gimm::read_xa_dicom(tmp("no_position.dcm").string());
   REQUIRE(f.warnings.size() == 1);
   CHECK_THAT(f.warnings[0], Catch::Contains("HFS") && Catch::Contains("assumed"));
+
+  // Elements that run past the end of the file or have a VR that is not one, in the file meta
+  // group and in the data set, and the other files GDCM (built with assertions) would abort on:
+  // gimm refuses them first, naming the element.
+  {
+    write_spec(tmp("whole.dcm"), Spec{});
+    std::ifstream in(tmp("whole.dcm"), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto sop = bytes.find(std::string("\x02\x00\x03\x00UI", 6));  // (0002,0003)
+    REQUIRE(sop != std::string::npos);
+    // Cut inside (0002,0003): the group length (0002,0000) promises more than the file holds.
+    std::ofstream(tmp("cut_meta.dcm"), std::ios::binary) << bytes.substr(0, sop + 13);
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("cut_meta.dcm").string()),
+                      Catch::Contains("cut_meta.dcm") && Catch::Contains("(0002,0000)") &&
+                          Catch::Contains("207 bytes"));
+    // Without the group length (an optional element: 12 bytes right after "DICM"), the same cut
+    // is found at the element, and a file of only a meta group at its end.
+    REQUIRE(bytes.compare(132, 6, std::string("\x02\x00\x00\x00UL", 6)) == 0);
+    const std::string no_length = bytes.substr(0, 132) + bytes.substr(144);
+    std::ofstream(tmp("cut_element.dcm"), std::ios::binary) << no_length.substr(0, sop - 12 + 13);
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("cut_element.dcm").string()),
+                      Catch::Contains("cut_element.dcm") && Catch::Contains("(0002,0003)") &&
+                          Catch::Contains("past the end"));
+    std::size_t data_set = sop - 12;  // the first (0008,xxxx) element with a VR
+    while (data_set + 6 < no_length.size() &&
+           !(no_length.compare(data_set, 2, std::string("\x08\x00", 2)) == 0 &&
+             std::isupper(static_cast<unsigned char>(no_length[data_set + 4])) &&
+             std::isupper(static_cast<unsigned char>(no_length[data_set + 5]))))
+      ++data_set;
+    std::ofstream(tmp("meta_only.dcm"), std::ios::binary) << no_length.substr(0, data_set);
+    CHECK_THROWS_WITH(
+        gimm::read_xa_dicom(tmp("meta_only.dcm").string()),
+        Catch::Contains("meta_only.dcm") && Catch::Contains("ends inside the file meta"));
+    std::string bad_vr = bytes;
+    bad_vr[sop + 4] = 'E';  // "EI": two letters, not a VR
+    std::ofstream(tmp("bad_vr.dcm"), std::ios::binary) << bad_vr;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("bad_vr.dcm").string()),
+                      Catch::Contains("bad_vr.dcm") && Catch::Contains("(0002,0003)") &&
+                          Catch::Contains("VR 'EI', which is not a DICOM VR"));
+    // The data set: (0018,1510) PositionerPrimaryAngle claims 0x3a08 bytes.
+    const auto angle =
+        bytes.find(std::string("\x18\x00\x10\x15"
+                               "DS",
+                               6));
+    REQUIRE(angle != std::string::npos);
+    std::string long_angle = bytes;
+    long_angle[angle + 6] = 0x08;
+    long_angle[angle + 7] = 0x3a;
+    std::ofstream(tmp("long_angle.dcm"), std::ios::binary) << long_angle;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("long_angle.dcm").string()),
+                      Catch::Contains("long_angle.dcm") && Catch::Contains("(0018,1510)") &&
+                          Catch::Contains("14856 bytes, past the end"));
+    const auto spp = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
+    REQUIRE(spp != std::string::npos);
+    std::string many_samples = bytes;
+    many_samples[spp + 8] = 9;
+    std::ofstream(tmp("samples.dcm"), std::ios::binary) << many_samples;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("samples.dcm").string()),
+                      Catch::Contains("(0028,0002)") && Catch::Contains("is 9"));
+    std::ofstream(tmp("tail.dcm"), std::ios::binary) << bytes << "tail";
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("tail.dcm").string()),
+                      Catch::Contains("tail.dcm") && Catch::Contains("4 bytes after element") &&
+                          Catch::Contains("(7FE0,0010)"));
+  }
 
   // A compressed syntax this build cannot decode: JPEG-LS pixels under the JPIP-referenced
   // transfer syntax UID (same length, so only the UID changes).

@@ -40,10 +40,12 @@
 #include <gdcmUIDGenerator.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -99,6 +101,109 @@ inline std::string tag_string(std::uint16_t group, std::uint16_t element) {
   char text[16];
   std::snprintf(text, sizeof text, "(%04X,%04X)", group, element);
   return text;
+}
+
+/// Walks the top-level elements of a DICOM Part 10 file (the file meta group, then the data
+/// set when it is explicit or implicit VR little endian) before GDCM reads it, and refuses what
+/// would make GDCM abort: an element whose value runs past the end of the file, two letters
+/// that are not a VR, a tail too short to be an element, a file that ends in its meta group,
+/// SamplesPerPixel other than 1. Why: Debian's GDCM is built with assertions, and such files
+/// abort the process inside GDCM instead of failing (docs/dev/fuzzing.md). The walk ends, and
+/// GDCM reads on its own, at elements of undefined length (sequences, encapsulated pixels), at
+/// data set VR bytes that are not letters (GDCM reads files that mix implicit into explicit VR), in
+/// other transfer syntaxes, and for files without the "DICM" prefix; a meta group element whose VR
+/// bytes are not letters is walked as implicit VR, as GDCM reads it.
+inline void check_top_level_elements(const std::string& path) {
+  const std::uint64_t size = file_size_of(path);
+  std::ifstream in(path, std::ios::binary);
+  GIMM_CHECK_AS(IoError, in, path << ": cannot open");
+  unsigned char b[12];
+  const auto read_at = [&](std::uint64_t at, std::size_t n) {
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(at));
+    in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n));
+    return static_cast<std::size_t>(in.gcount()) == n;
+  };
+  const auto u16 = [&](int at) { return std::uint16_t(b[at] | b[at + 1] << 8); };
+  const auto u32 = [&](int at) {
+    return std::uint32_t(u16(at)) | std::uint32_t(u16(at + 2)) << 16;
+  };
+  if (size < 132 || !read_at(128, 4) || std::memcmp(b, "DICM", 4) != 0) return;
+  std::string syntax;  // (0002,0010)
+  bool meta = true, implicit = false;
+  for (std::uint64_t at = 132; at + 8 <= size;) {
+    if (!read_at(at, 8)) return;
+    const std::uint16_t group = u16(0), element = u16(2);
+    if (meta && group != 0x0002) {
+      meta = false;
+      if (syntax == "1.2.840.10008.1.2")
+        implicit = true;
+      else if (syntax == "1.2.840.10008.1.2.2" || syntax == "1.2.840.10008.1.2.1.99")
+        return;  // big endian, deflated
+    }
+    if (group == 0xFFFE) return;  // an item tag at the top level: GDCM's to judge
+    const std::string tag = tag_string(group, element);
+    std::uint64_t length = 0, header = 8;
+    std::string vr = "implicit";
+    const bool letters = std::isupper(b[4]) && std::isupper(b[5]);
+    if (!letters && !meta) return;  // implicit VR inside explicit: GDCM's own heuristics
+    if (implicit || !letters) {     // (a meta group in implicit VR: GDCM reads it that way too)
+      length = u32(4);
+    } else {
+      vr.assign(reinterpret_cast<const char*>(b + 4), 2);
+      // The VRs of PS3.5 6.2; the second row has a 4-byte length (after 2 reserved bytes).
+      static const std::string short_form =
+          "AE AS AT CS DA DS DT FL FD IS LO LT PN SH SL SS ST "
+          "TM UI UL US";
+      static const std::string long_form = "OB OD OF OL OV OW SQ SV UC UN UR UT UV";
+      const auto is_vr = [&](const std::string& list) {
+        const auto found = list.find(vr);
+        return found != std::string::npos && found % 3 == 0;
+      };
+      GIMM_CHECK_AS(FormatError, is_vr(short_form) || is_vr(long_form),
+                    path << ": element " << tag << " at byte " << at << " has VR '" << vr
+                         << "', which is not a DICOM VR");
+      if (is_vr(long_form)) {
+        GIMM_CHECK_AS(FormatError, read_at(at, 12),
+                      path << ": element " << tag << " is cut off at byte " << at);
+        length = u32(8);
+        header = 12;
+      } else {
+        length = u16(6);
+      }
+    }
+    if (length == 0xFFFFFFFFu) return;  // undefined length: not walked here
+    GIMM_CHECK_AS(FormatError, at + header + length <= size,
+                  path << ": element " << tag << " (VR " << vr << ") at byte " << at << " claims "
+                       << length << " bytes, past the end of the " << size << "-byte file");
+    if (meta && element == 0x0000 && length == 4 && read_at(at + header, 4)) {
+      // (0002,0000) FileMetaInformationGroupLength: the meta group's bytes after it.
+      const std::uint64_t group_end = at + header + 4 + u32(0);
+      GIMM_CHECK_AS(FormatError, group_end < size,
+                    path << ": the file meta group length (0002,0000) = " << u32(0)
+                         << " ends at byte " << group_end << ", but the file has " << size
+                         << " bytes and needs a data set after it");
+      read_at(at, 8);
+    }
+    if (group == 0x0028 && element == 0x0002 && length == 2 && read_at(at + header, 2))
+      // GDCM asserts SamplesPerPixel <= 4; gimm reads one sample per pixel.
+      GIMM_CHECK_AS(FormatError, u16(0) == 1,
+                    path << ": (0028,0002) SamplesPerPixel is " << u16(0)
+                         << ": gimm reads grey-scale frames (1 sample per pixel)");
+    if (meta && element == 0x0010 && length < 256) {
+      std::string value(length, '\0');
+      in.seekg(static_cast<std::streamoff>(at + header));
+      in.read(value.data(), static_cast<std::streamsize>(length));
+      syntax = value.substr(0, value.find_last_not_of(std::string(" \0", 2)) + 1);
+    }
+    at += header + length;
+    GIMM_CHECK_AS(FormatError, at == size || at + 8 <= size,
+                  path << ": " << size - at << " bytes after element " << tag
+                       << " at the end of the file: too few for another element");
+    GIMM_CHECK_AS(
+        FormatError, !(meta && at == size),
+        path << ": the file ends inside the file meta group (after " << tag << "): no data set");
+  }
 }
 
 /// `s` without leading and trailing blanks (DICOM pads values to an even length).
@@ -246,6 +351,7 @@ inline Image<float> percentile_window(const std::vector<double>& values, int row
 inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& options = {}) {
   detail::quiet_gdcm();
   GIMM_CHECK(std::filesystem::is_regular_file(path), path << ": no such file");
+  detail::check_top_level_elements(path);
   gdcm::ImageReader reader;
   reader.SetFileName(path.c_str());
   if (!reader.Read()) {
