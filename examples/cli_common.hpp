@@ -12,40 +12,31 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/carm.hpp"
+#include "gimm/nn/shipped_weights.hpp"
 #include "gimm/version.hpp"
 
 namespace gimm::cli {
 
-/// The shipped matcher weights' file name (weights/README.md is their model card).
-inline constexpr const char* kShippedWeights = "gimm-phantom-128.safetensors";
-
-/// Where the shipped weights are looked for, in order: $GIMM_WEIGHTS, the install tree
+/// Where the shipped weights are looked for, after $GIMM_WEIGHTS: the install tree
 /// (<prefix>/share/gimm/weights beside <prefix>/bin), the source tree this binary was built from.
-inline std::vector<std::filesystem::path> default_weights_candidates() {
+inline std::vector<std::filesystem::path> default_weights_dirs() {
   std::vector<std::filesystem::path> out;
-  if (const char* env = std::getenv("GIMM_WEIGHTS")) out.emplace_back(env);
   std::error_code ec;
   const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec)
-    out.push_back(exe.parent_path().parent_path() / "share" / "gimm" / "weights" / kShippedWeights);
+  if (!ec) out.push_back(exe.parent_path().parent_path() / "share" / "gimm" / "weights");
 #ifdef GIMM_SOURCE_WEIGHTS_DIR
-  out.push_back(std::filesystem::path(GIMM_SOURCE_WEIGHTS_DIR) / kShippedWeights);
+  out.emplace_back(GIMM_SOURCE_WEIGHTS_DIR);
 #endif
   return out;
 }
 
 inline std::string default_weights_hint() {
-  return std::string("$GIMM_WEIGHTS, else share/gimm/weights/") + kShippedWeights;
+  return std::string("$GIMM_WEIGHTS, else share/gimm/weights/") + nn::kShippedWeights;
 }
 
-/// The first existing default_weights_candidates(); an error naming every place looked in.
+/// The shipped weights (nn/shipped_weights.hpp); an error naming every place looked in.
 inline std::string default_weights() {
-  std::string tried;
-  for (const auto& p : default_weights_candidates()) {
-    if (std::filesystem::is_regular_file(p)) return p.string();
-    tried += " '" + p.string() + "'";
-  }
-  GIMM_FAIL("no --weights given and the shipped weights are not at" << tried);
+  return nn::find_shipped_weights(default_weights_dirs());
 }
 
 /// The C-arm flags shared by gimm-carm and gimm-drr; fills `carm`.

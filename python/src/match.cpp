@@ -14,38 +14,30 @@
 #include "gimm/metrics/summary.hpp"
 #include "gimm/metrics/user_truth.hpp"
 #include "gimm/nn/matcher_file.hpp"
+#include "gimm/nn/shipped_weights.hpp"
 
 namespace gimm::python {
 
 namespace {
 
-constexpr const char* kShippedWeights = "gimm-phantom-128.safetensors";
-
-/// The shipped weights: $GIMM_WEIGHTS; beside the package (a wheel's gimm/weights/); an
-/// install tree's share/gimm/weights above the package; the source tree it was built from.
+/// The shipped weights (nn/shipped_weights.hpp): after $GIMM_WEIGHTS, beside the package (a
+/// wheel's gimm/weights/); an install tree's share/gimm/weights above the package; the source
+/// tree it was built from.
 std::string default_weights() {
   namespace fs = std::filesystem;
   const py::module_ self = py::module_::import("gimm._gimm");
-  std::vector<fs::path> candidates;
-  if (const char* env = std::getenv("GIMM_WEIGHTS")) candidates.emplace_back(env);
   const fs::path package = fs::path(self.attr("__file__").cast<std::string>()).parent_path();
-  candidates.push_back(package / "weights" / kShippedWeights);
+  std::vector<fs::path> dirs{package / "weights"};
   for (fs::path dir = package; dir.has_parent_path() && dir != dir.parent_path();
        dir = dir.parent_path())
     if (fs::is_directory(dir / "share" / "gimm" / "weights")) {
-      candidates.push_back(dir / "share" / "gimm" / "weights" / kShippedWeights);
+      dirs.push_back(dir / "share" / "gimm" / "weights");
       break;
     }
 #ifdef GIMM_SOURCE_WEIGHTS_DIR
-  candidates.push_back(fs::path(GIMM_SOURCE_WEIGHTS_DIR) / kShippedWeights);
+  dirs.emplace_back(GIMM_SOURCE_WEIGHTS_DIR);
 #endif
-  std::string tried;
-  for (const auto& p : candidates) {
-    if (fs::is_regular_file(p)) return p.string();
-    tried += " '" + p.string() + "'";
-  }
-  throw IoError("gimm: no weights given and the shipped weights are not at" + tried +
-                " (set GIMM_WEIGHTS)");
+  return nn::find_shipped_weights(dirs);
 }
 
 py::object parse_json(const nlohmann::json& j) {

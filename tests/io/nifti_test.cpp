@@ -85,6 +85,29 @@ TEMPLATE_TEST_CASE("NIfTI round trip keeps voxels and geometry", "[io][nifti]", 
   }
 }
 
+TEST_CASE("NIfTI from memory equals the file read, gzipped or not, and names the bytes",
+          "[io][nifti]") {
+  const auto v = ramp<float>(oblique_geometry());
+  for (const char* name : {"memory.nii", "memory.nii.gz"}) {
+    const auto p = tmp_path(name);
+    gimm::write_nifti(p, v);
+    const auto from_file = gimm::read_nifti<float>(p);
+    const auto from_memory = gimm::nifti_from_bytes<float>(gimm::read_file_bytes(p), "buffer");
+    CHECK(from_memory.storage() == from_file.storage());
+    CHECK(from_memory.geometry().dims == from_file.geometry().dims);
+    CHECK((from_memory.origin() - from_file.origin()).norm() == 0);
+    CHECK((from_memory.direction() - from_file.direction()).norm() == 0);
+  }
+  std::vector<unsigned char> bytes = valid_file_bytes();
+  bytes.resize(400);  // the header promises 60 int16 voxels after byte 352
+  try {
+    (void)gimm::nifti_from_bytes<float>(bytes, "my buffer");
+    FAIL("no error for truncated bytes");
+  } catch (const gimm::FormatError& e) {
+    CHECK(std::string(e.what()).find("my buffer") != std::string::npos);
+  }
+}
+
 TEST_CASE("NIfTI stores RAS: LPS +x (patient left) is stored as -x", "[io][nifti]") {
   gimm::VolumeGeometry g;
   g.dims = {2, 2, 2};

@@ -361,13 +361,10 @@ inline NiftiHeader read_nifti_header(const std::filesystem::path& path) {
   return detail::parse_nifti_header(bytes, path.string());
 }
 
-/// Reads a NIfTI-1 volume into Volume<T> (LPS world). Throws gimm::IoError if the file cannot
-/// be read, gimm::FormatError (naming the file) if it is malformed.
+/// A NIfTI-1 volume from the bytes of a .nii or .nii.gz file already in memory; `what` names
+/// them in errors (gimm::FormatError).
 template <class T>
-Volume<T> read_nifti(const std::filesystem::path& path) {
-  const std::string what = path.string();
-  if (auto direct = detail::read_nifti_in_place<T>(path)) return std::move(*direct);
-  auto bytes = read_file_bytes(path);
+Volume<T> nifti_from_bytes(std::vector<unsigned char> bytes, const std::string& what) {
   if (is_gzip(bytes)) bytes = detail::inflate_nifti(bytes, what);
   const NiftiHeader header = detail::parse_nifti_header(bytes, what);
   Volume<T> volume(header.geometry);
@@ -375,6 +372,14 @@ Volume<T> read_nifti(const std::filesystem::path& path) {
   detail::decode_voxels(detail::nifti_stored_type(header.datatype), src, header.byte_swapped,
                         header.scl_slope, header.scl_inter, what, volume.data(), volume.size());
   return volume;
+}
+
+/// Reads a NIfTI-1 volume into Volume<T> (LPS world). Throws gimm::IoError if the file cannot
+/// be read, gimm::FormatError (naming the file) if it is malformed.
+template <class T>
+Volume<T> read_nifti(const std::filesystem::path& path) {
+  if (auto direct = detail::read_nifti_in_place<T>(path)) return std::move(*direct);
+  return nifti_from_bytes<T>(read_file_bytes(path), path.string());
 }
 
 /// Writes `volume` as NIfTI-1, gzipped if the name ends in ".gz", atomically (a temporary file
