@@ -7,6 +7,9 @@
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/carm.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace camera_test {
+
 using namespace gimm;
 
 namespace {
@@ -227,3 +230,5 @@ TEST_CASE("Camera::cast keeps the projection", "[geometry][camera]") {
   CHECK(std::string(to_string(model)) ==
         (model == ProjectionModel::perspective ? "perspective" : "orthographic"));
 }
+
+}  // namespace camera_test

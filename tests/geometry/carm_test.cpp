@@ -7,6 +7,9 @@
 
 #include "gimm/geometry/carm.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace carm_test {
+
 using namespace gimm;
 
 namespace {
@@ -290,3 +293,5 @@ TEST_CASE("CArm non-square pixels: each axis has its own focal length", "[geomet
   carm.pixel_row_mm = -1;
   CHECK_THROWS_WITH(carm.camera(), Catch::Contains("row pixel"));
 }
+
+}  // namespace carm_test

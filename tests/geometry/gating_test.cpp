@@ -9,6 +9,9 @@
 #include "gimm/geometry/gating.hpp"
 #include "scene.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace gating_test {
+
 using namespace gimm;
 using Catch::Matchers::Contains;
 using gimm_test::carm_pose;
@@ -308,3 +311,5 @@ TEST_CASE("gate_reference: F from the top-k matches weighted by confidence", "[g
     }
   }
 }
+
+}  // namespace gating_test

@@ -9,6 +9,9 @@
 #include "gimm/io/nifti.hpp"
 #include "volume_fixtures.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace metaimage_test {
+
 namespace fs = std::filesystem;
 using fixtures::fixture_difference;
 using fixtures::format_error;
@@ -317,3 +320,5 @@ TEST_CASE("MetaImage into an integer type refuses values that are not integers i
   CHECK_THAT(mha_error<std::uint16_t>("float.mha", text, fixtures::stored_bytes<float>(false)),
              Catch::Contains("voxel 0"));
 }
+
+}  // namespace metaimage_test

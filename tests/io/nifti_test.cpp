@@ -7,6 +7,9 @@
 
 #include "gimm/io/nifti.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace nifti_test {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -301,3 +304,5 @@ TEST_CASE("NIfTI writes are atomic and deterministic", "[io][nifti]") {
   CHECK_THROWS_AS(gimm::write_nifti(fs::path(GIMM_TEST_TMP) / "no_such_dir" / "x.nii", v),
                   gimm::IoError);
 }
+
+}  // namespace nifti_test

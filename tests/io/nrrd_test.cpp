@@ -8,6 +8,9 @@
 #include "gimm/io/nrrd.hpp"
 #include "volume_fixtures.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace nrrd_test {
+
 namespace fs = std::filesystem;
 using fixtures::fixture_difference;
 using fixtures::format_error;
@@ -344,3 +347,5 @@ TEST_CASE("NRRD into an integer type refuses values that are not integers in ran
   CHECK(fixture_difference(read_header("float.nhdr", text)) == "");
   CHECK_THAT(nrrd_error<std::uint8_t>("float.nhdr", text), Catch::Contains("voxel 0"));
 }
+
+}  // namespace nrrd_test

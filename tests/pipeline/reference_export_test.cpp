@@ -10,6 +10,9 @@
 #include "gimm/pipeline/dataset.hpp"
 #include "gimm/pipeline/reference_export.hpp"
 
+// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+namespace reference_export_test {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -332,3 +335,5 @@ TEST_CASE("Reference export: ids are checked before anything is written", "[pipe
       Catch::Contains("patient id 'x_1'") && Catch::Contains((dataset / "manifest.json").string()));
   CHECK(!fs::exists(out / "images"));
 }
+
+}  // namespace reference_export_test
