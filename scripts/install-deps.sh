@@ -5,6 +5,7 @@
 #   scripts/install-deps.sh            build + tests + examples (the default)
 #   scripts/install-deps.sh bench      + side-by-side anchors (plastimatch, OpenCV, hyperfine, Node/npm)
 #   scripts/install-deps.sh train      + PyTorch (with OpenBLAS) for tools/train
+#   scripts/install-deps.sh fuzz       + clang and its libFuzzer/sanitizer runtimes (tests/fuzz)
 #   scripts/install-deps.sh all        everything
 set -euo pipefail
 
@@ -14,6 +15,7 @@ core=(build-essential cmake pkg-config git libeigen3-dev libglm-dev libembree-de
       pybind11-dev python3-pybind11 python3-pil)
 bench=(plastimatch libopencv-dev python3-opencv hyperfine)
 train=(python3-torch libopenblas0-pthread)
+fuzz=(clang libclang-rt-14-dev)
 
 wanted=("${core[@]}")
 for group in "$@"; do
@@ -21,8 +23,9 @@ for group in "$@"; do
     core) ;;
     bench) wanted+=("${bench[@]}") ;;
     train) wanted+=("${train[@]}") ;;
-    all) wanted+=("${bench[@]}" "${train[@]}") ;;
-    *) echo "error: install-deps.sh: unknown group '$group' (core|bench|train|all)" >&2; exit 2 ;;
+    fuzz) wanted+=("${fuzz[@]}") ;;
+    all) wanted+=("${bench[@]}" "${train[@]}" "${fuzz[@]}") ;;
+    *) echo "error: install-deps.sh: unknown group '$group' (core|bench|train|fuzz|all)" >&2; exit 2 ;;
   esac
 done
 

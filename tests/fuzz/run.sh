@@ -39,11 +39,8 @@ done
 cmake -S "$src" -B "$build" -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Release \
   -DGIMM_FUZZ_LIBFUZZER=ON -DGIMM_BUILD_PYTHON=OFF > "$build.configure.log" 2>&1 ||
   { tail -20 "$build.configure.log" >&2; exit 1; }
-binaries=()
-for t in "${targets[@]}"; do
-  [ "$t" = siddon ] && binaries+=(gimm_siddon_libfuzzer) || binaries+=("gimm_fuzz_$t")
-done
-cmake --build "$build" -j2 --target "${binaries[@]}"
+# Both binaries in one build (parallel); each reader is a link to gimm_fuzz_readers.
+cmake --build "$build" -j2 --target gimm_libfuzzers
 
 out=$build/fuzz
 mkdir -p "$out/artifacts"

@@ -468,6 +468,16 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("long_angle.dcm").string()),
                       Catch::Contains("long_angle.dcm") && Catch::Contains("(0018,1510)") &&
                           Catch::Contains("14856 bytes, past the end"));
+    // The same element with VR bytes that are not letters: GDCM reads it as implicit VR (a
+    // 4-byte length, here 0x9B000000) and allocated 2.6 GB for it before gimm refused it first
+    // (found by libFuzzer: docs/dev/fuzzing.md).
+    std::string implicit_angle = bytes;
+    implicit_angle.replace(angle + 4, 4, std::string("\x00\x00\x00\x9B", 4));
+    std::ofstream(tmp("implicit_angle.dcm"), std::ios::binary) << implicit_angle;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("implicit_angle.dcm").string()),
+                      Catch::Contains("implicit_angle.dcm") && Catch::Contains("(0018,1510)") &&
+                          Catch::Contains("VR implicit") &&
+                          Catch::Contains("2600468480 bytes, past the end"));
     const auto spp = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
     REQUIRE(spp != std::string::npos);
     std::string many_samples = bytes;

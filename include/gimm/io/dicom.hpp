@@ -103,106 +103,153 @@ inline std::string tag_string(std::uint16_t group, std::uint16_t element) {
   return text;
 }
 
+/// Little-endian bytes of a file, read at an offset into a small window.
+class DicomBytes {
+ public:
+  explicit DicomBytes(const std::string& path)
+      : size(file_size_of(path)), in_(path, std::ios::binary) {
+    GIMM_CHECK_AS(IoError, in_, path << ": cannot open");
+  }
+  /// Reads `n` (<= 12) bytes at `at` into the window; false if the file ends first.
+  bool read_at(std::uint64_t at, std::size_t n) {
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(at));
+    in_.read(reinterpret_cast<char*>(b_), static_cast<std::streamsize>(n));
+    return static_cast<std::size_t>(in_.gcount()) == n;
+  }
+  std::uint8_t u8(int i) const { return b_[i]; }
+  std::uint16_t u16(int i) const { return std::uint16_t(b_[i] | b_[i + 1] << 8); }
+  std::uint32_t u32(int i) const { return std::uint32_t(u16(i)) | std::uint32_t(u16(i + 2)) << 16; }
+  std::string text(int i, int n) const {
+    return std::string(reinterpret_cast<const char*>(b_ + i), n);
+  }
+  /// `n` bytes at `at` as text, trailing blanks and NULs removed.
+  std::string value_at(std::uint64_t at, std::size_t n) {
+    std::string value(n, '\0');
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(at));
+    in_.read(value.data(), static_cast<std::streamsize>(n));
+    return value.substr(0, value.find_last_not_of(std::string(" \0", 2)) + 1);
+  }
+  const std::uint64_t size;
+
+ private:
+  std::ifstream in_;
+  unsigned char b_[12];
+};
+
+/// One element's header: its tag, VR ("implicit" when none is written), value length (bytes;
+/// 0xFFFFFFFF is undefined) and where its value starts.
+struct DicomElementHeader {
+  std::uint16_t group = 0, element = 0;
+  std::string vr = "implicit";
+  std::uint64_t length = 0, value_at = 0;
+  std::string tag() const { return tag_string(group, element); }
+};
+
+/// The header of the element at byte `at`, in implicit or explicit VR little endian. An element
+/// whose VR bytes are not two capitals is read as implicit, as GDCM reads it (it accepts files
+/// that mix implicit into explicit VR); two capitals that are not one of DICOM's VRs are refused.
+inline DicomElementHeader read_element_header(DicomBytes& bytes, std::uint64_t at, bool implicit,
+                                              const std::string& path) {
+  DicomElementHeader h;
+  GIMM_CHECK_AS(FormatError, bytes.read_at(at, 8),
+                path << ": element header cut off at byte " << at);
+  h.group = bytes.u16(0);
+  h.element = bytes.u16(2);
+  h.value_at = at + 8;
+  const bool letters = std::isupper(bytes.u8(4)) && std::isupper(bytes.u8(5));
+  if (implicit || !letters) {
+    h.length = bytes.u32(4);
+    return h;
+  }
+  h.vr = bytes.text(4, 2);
+  // The VRs of PS3.5 6.2; the second row has a 4-byte length (after 2 reserved bytes).
+  static const std::string short_form =
+      "AE AS AT CS DA DS DT FL FD IS LO LT PN SH SL SS ST TM UI UL US";
+  static const std::string long_form = "OB OD OF OL OV OW SQ SV UC UN UR UT UV";
+  const auto is_vr = [&](const std::string& list) {
+    const auto found = list.find(h.vr);
+    return found != std::string::npos && found % 3 == 0;
+  };
+  GIMM_CHECK_AS(FormatError, is_vr(short_form) || is_vr(long_form),
+                path << ": element " << h.tag() << " at byte " << at << " has VR '" << h.vr
+                     << "', which is not a DICOM VR");
+  if (is_vr(long_form)) {
+    GIMM_CHECK_AS(FormatError, bytes.read_at(at, 12),
+                  path << ": element " << h.tag() << " is cut off at byte " << at);
+    h.length = bytes.u32(8);
+    h.value_at = at + 12;
+  } else {
+    h.length = bytes.u16(6);
+  }
+  return h;
+}
+
+/// The file meta group's own rule: (0002,0000), its group length, leaves room for a data set.
+inline void check_meta_group_length(DicomBytes& bytes, const DicomElementHeader& h,
+                                    const std::string& path) {
+  if (h.element != 0x0000 || h.length != 4 || !bytes.read_at(h.value_at, 4)) return;
+  const std::uint64_t group_end = h.value_at + 4 + bytes.u32(0);
+  GIMM_CHECK_AS(FormatError, group_end < bytes.size,
+                path << ": the file meta group length (0002,0000) = " << bytes.u32(0)
+                     << " ends at byte " << group_end << ", but the file has " << bytes.size
+                     << " bytes and needs a data set after it");
+}
+
+/// Values GDCM checks with assertions: SamplesPerPixel (it asserts <= 4; gimm reads 1).
+inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
+                                const std::string& path) {
+  if (h.group == 0x0028 && h.element == 0x0002 && h.length == 2 && bytes.read_at(h.value_at, 2))
+    GIMM_CHECK_AS(FormatError, bytes.u16(0) == 1,
+                  path << ": (0028,0002) SamplesPerPixel is " << bytes.u16(0)
+                       << ": gimm reads grey-scale frames (1 sample per pixel)");
+}
+
 /// Walks the top-level elements of a DICOM Part 10 file (the file meta group, then the data
 /// set when it is explicit or implicit VR little endian) before GDCM reads it, and refuses what
-/// would make GDCM abort: an element whose value runs past the end of the file, two letters
-/// that are not a VR, a tail too short to be an element, a file that ends in its meta group,
-/// SamplesPerPixel other than 1. Why: Debian's GDCM is built with assertions, and such files
-/// abort the process inside GDCM instead of failing (docs/dev/fuzzing.md). The walk ends, and
-/// GDCM reads on its own, at elements of undefined length (sequences, encapsulated pixels), at
-/// data set VR bytes that are not letters (GDCM reads files that mix implicit into explicit VR), in
-/// other transfer syntaxes, and for files without the "DICM" prefix; a meta group element whose VR
-/// bytes are not letters is walked as implicit VR, as GDCM reads it.
+/// would make GDCM abort or allocate what the file cannot hold: an element whose value runs
+/// past the end of the file (GDCM allocates the claimed length first: 2.6 GB for a 900-byte
+/// file), two capitals that are not a VR, a tail too short to be an element, a file that ends
+/// in its meta group, SamplesPerPixel other than 1. Why: Debian's GDCM is built with
+/// assertions, and such files abort the process inside GDCM instead of failing
+/// (docs/dev/fuzzing.md). The walk ends, and GDCM reads on its own, at elements of undefined
+/// length (sequences, encapsulated pixels), at an item tag, in other transfer syntaxes, and for
+/// files without the "DICM" prefix.
 inline void check_top_level_elements(const std::string& path) {
-  const std::uint64_t size = file_size_of(path);
-  std::ifstream in(path, std::ios::binary);
-  GIMM_CHECK_AS(IoError, in, path << ": cannot open");
-  unsigned char b[12];
-  const auto read_at = [&](std::uint64_t at, std::size_t n) {
-    in.clear();
-    in.seekg(static_cast<std::streamoff>(at));
-    in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(n));
-    return static_cast<std::size_t>(in.gcount()) == n;
-  };
-  const auto u16 = [&](int at) { return std::uint16_t(b[at] | b[at + 1] << 8); };
-  const auto u32 = [&](int at) {
-    return std::uint32_t(u16(at)) | std::uint32_t(u16(at + 2)) << 16;
-  };
-  if (size < 132 || !read_at(128, 4) || std::memcmp(b, "DICM", 4) != 0) return;
+  DicomBytes bytes(path);
+  const std::uint64_t size = bytes.size;
+  if (size < 132 || !bytes.read_at(128, 4) || bytes.text(0, 4) != "DICM") return;
   std::string syntax;  // (0002,0010)
   bool meta = true, implicit = false;
   for (std::uint64_t at = 132; at + 8 <= size;) {
-    if (!read_at(at, 8)) return;
-    const std::uint16_t group = u16(0), element = u16(2);
-    if (meta && group != 0x0002) {
+    if (!bytes.read_at(at, 8)) return;
+    if (meta && bytes.u16(0) != 0x0002) {
       meta = false;
       if (syntax == "1.2.840.10008.1.2")
         implicit = true;
       else if (syntax == "1.2.840.10008.1.2.2" || syntax == "1.2.840.10008.1.2.1.99")
         return;  // big endian, deflated
     }
-    if (group == 0xFFFE) return;  // an item tag at the top level: GDCM's to judge
-    const std::string tag = tag_string(group, element);
-    std::uint64_t length = 0, header = 8;
-    std::string vr = "implicit";
-    const bool letters = std::isupper(b[4]) && std::isupper(b[5]);
-    if (!letters && !meta) return;  // implicit VR inside explicit: GDCM's own heuristics
-    if (implicit || !letters) {     // (a meta group in implicit VR: GDCM reads it that way too)
-      length = u32(4);
-    } else {
-      vr.assign(reinterpret_cast<const char*>(b + 4), 2);
-      // The VRs of PS3.5 6.2; the second row has a 4-byte length (after 2 reserved bytes).
-      static const std::string short_form =
-          "AE AS AT CS DA DS DT FL FD IS LO LT PN SH SL SS ST "
-          "TM UI UL US";
-      static const std::string long_form = "OB OD OF OL OV OW SQ SV UC UN UR UT UV";
-      const auto is_vr = [&](const std::string& list) {
-        const auto found = list.find(vr);
-        return found != std::string::npos && found % 3 == 0;
-      };
-      GIMM_CHECK_AS(FormatError, is_vr(short_form) || is_vr(long_form),
-                    path << ": element " << tag << " at byte " << at << " has VR '" << vr
-                         << "', which is not a DICOM VR");
-      if (is_vr(long_form)) {
-        GIMM_CHECK_AS(FormatError, read_at(at, 12),
-                      path << ": element " << tag << " is cut off at byte " << at);
-        length = u32(8);
-        header = 12;
-      } else {
-        length = u16(6);
-      }
-    }
-    if (length == 0xFFFFFFFFu) return;  // undefined length: not walked here
-    GIMM_CHECK_AS(FormatError, at + header + length <= size,
-                  path << ": element " << tag << " (VR " << vr << ") at byte " << at << " claims "
-                       << length << " bytes, past the end of the " << size << "-byte file");
-    if (meta && element == 0x0000 && length == 4 && read_at(at + header, 4)) {
-      // (0002,0000) FileMetaInformationGroupLength: the meta group's bytes after it.
-      const std::uint64_t group_end = at + header + 4 + u32(0);
-      GIMM_CHECK_AS(FormatError, group_end < size,
-                    path << ": the file meta group length (0002,0000) = " << u32(0)
-                         << " ends at byte " << group_end << ", but the file has " << size
-                         << " bytes and needs a data set after it");
-      read_at(at, 8);
-    }
-    if (group == 0x0028 && element == 0x0002 && length == 2 && read_at(at + header, 2))
-      // GDCM asserts SamplesPerPixel <= 4; gimm reads one sample per pixel.
-      GIMM_CHECK_AS(FormatError, u16(0) == 1,
-                    path << ": (0028,0002) SamplesPerPixel is " << u16(0)
-                         << ": gimm reads grey-scale frames (1 sample per pixel)");
-    if (meta && element == 0x0010 && length < 256) {
-      std::string value(length, '\0');
-      in.seekg(static_cast<std::streamoff>(at + header));
-      in.read(value.data(), static_cast<std::streamsize>(length));
-      syntax = value.substr(0, value.find_last_not_of(std::string(" \0", 2)) + 1);
-    }
-    at += header + length;
+    if (bytes.u16(0) == 0xFFFE) return;  // an item tag at the top level: GDCM's to judge
+    // (a meta group in implicit VR: GDCM reads it that way too)
+    const DicomElementHeader h = read_element_header(bytes, at, implicit, path);
+    if (h.length == 0xFFFFFFFFu) return;  // undefined length: not walked here
+    GIMM_CHECK_AS(FormatError, h.value_at + h.length <= size,
+                  path << ": element " << h.tag() << " (VR " << h.vr << ") at byte " << at
+                       << " claims " << h.length << " bytes, past the end of the " << size
+                       << "-byte file");
+    if (meta) check_meta_group_length(bytes, h, path);
+    check_element_value(bytes, h, path);
+    if (meta && h.element == 0x0010 && h.length < 256)
+      syntax = bytes.value_at(h.value_at, h.length);
+    at = h.value_at + h.length;
     GIMM_CHECK_AS(FormatError, at == size || at + 8 <= size,
-                  path << ": " << size - at << " bytes after element " << tag
+                  path << ": " << size - at << " bytes after element " << h.tag()
                        << " at the end of the file: too few for another element");
-    GIMM_CHECK_AS(
-        FormatError, !(meta && at == size),
-        path << ": the file ends inside the file meta group (after " << tag << "): no data set");
+    GIMM_CHECK_AS(FormatError, !(meta && at == size),
+                  path << ": the file ends inside the file meta group (after " << h.tag()
+                       << "): no data set");
   }
 }
 
