@@ -97,6 +97,11 @@ inline void quiet_gdcm() {
   gdcm::Trace::SetError(false);
 }
 
+/// The largest ratio of decoded to file size gimm accepts for compressed pixels: lossless
+/// coronary cine compresses about 2-4:1, and a forged header must not make gimm allocate
+/// gigabytes for a small file (docs/dev/fuzzing.md).
+inline constexpr std::uint64_t kMaxDicomCompression = 256;
+
 inline std::string tag_string(std::uint16_t group, std::uint16_t element) {
   char text[16];
   std::snprintf(text, sizeof text, "(%04X,%04X)", group, element);
@@ -197,60 +202,171 @@ inline void check_meta_group_length(DicomBytes& bytes, const DicomElementHeader&
                      << " bytes and needs a data set after it");
 }
 
-/// Values GDCM checks with assertions: SamplesPerPixel (it asserts <= 4; gimm reads 1).
+/// Values GDCM checks with assertions: SamplesPerPixel (it asserts <= 4; gimm reads 1) and the
+/// retired ACR-NEMA RecognitionCode (0008,0010) (it asserts the value starts "ACR-NEMA").
 inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
                                 const std::string& path) {
+  if (h.group == 0x0008 && h.element == 0x0010) {
+    const std::string code = bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 8));
+    GIMM_CHECK_AS(FormatError, code == "ACR-NEMA",
+                  path << ": (0008,0010) RecognitionCode (a retired ACR-NEMA element) is '" << code
+                       << "...', not 'ACR-NEMA...'");
+  }
   if (h.group == 0x0028 && h.element == 0x0002 && h.length == 2 && bytes.read_at(h.value_at, 2))
     GIMM_CHECK_AS(FormatError, bytes.u16(0) == 1,
                   path << ": (0028,0002) SamplesPerPixel is " << bytes.u16(0)
                        << ": gimm reads grey-scale frames (1 sample per pixel)");
 }
 
-/// Walks the top-level elements of a DICOM Part 10 file (the file meta group, then the data
-/// set when it is explicit or implicit VR little endian) before GDCM reads it, and refuses what
-/// would make GDCM abort or allocate what the file cannot hold: an element whose value runs
-/// past the end of the file (GDCM allocates the claimed length first: 2.6 GB for a 900-byte
-/// file), two capitals that are not a VR, a tail too short to be an element, a file that ends
-/// in its meta group, SamplesPerPixel other than 1. Why: Debian's GDCM is built with
-/// assertions, and such files abort the process inside GDCM instead of failing
-/// (docs/dev/fuzzing.md). The walk ends, and GDCM reads on its own, at elements of undefined
-/// length (sequences, encapsulated pixels), at an item tag, in other transfer syntaxes, and for
-/// files without the "DICM" prefix.
+constexpr std::uint32_t kUndefinedLength = 0xFFFFFFFFu;
+constexpr int kMaxSequenceDepth = 16;
+
+inline std::uint64_t walk_items(DicomBytes& bytes, std::uint64_t at, std::uint64_t end,
+                                bool delimited, bool implicit, bool fragments, int depth,
+                                const std::string& path);
+
+/// Walks the elements of a data set from byte `at`: up to `end` (the file, or a defined-length
+/// item), or, when `delimited`, up to its item delimiter (FFFE,E00D). Returns the byte after it.
+/// Refuses, naming the element and the byte: a value past `end`, VR bytes that are not a VR in
+/// explicit VR, tags out of order, a tail too short for an element, and the values of
+/// check_element_value. Sequences and encapsulated pixels are walked through walk_items.
+inline std::uint64_t walk_data_set(DicomBytes& bytes, std::uint64_t at, std::uint64_t end,
+                                   bool delimited, bool implicit, int depth,
+                                   const std::string& path) {
+  std::uint32_t previous_tag = 0;  // tags ascend (PS3.5 7.1)
+  std::string previous = "the item header";
+  for (;;) {
+    if (!delimited && at == end) return at;
+    GIMM_CHECK_AS(FormatError, at + 8 <= end && bytes.read_at(at, 8),
+                  path << ": " << end - at << " bytes after element " << previous
+                       << " at the end of " << (end == bytes.size ? "the file" : "an item")
+                       << ": too few for another element");
+    if (bytes.u16(0) == 0xFFFE) {
+      GIMM_CHECK_AS(FormatError, delimited && bytes.u16(2) == 0xE00D,
+                    path << ": item tag " << tag_string(0xFFFE, bytes.u16(2)) << " at byte " << at
+                         << " where a data element is expected");
+      return at + 8;
+    }
+    const DicomElementHeader h = read_element_header(bytes, at, implicit, path);
+    // Mixed implicit VR inside explicit VR, and tags out of order, send GDCM guessing (asserts
+    // and gigabyte allocations, found by libFuzzer); a conforming file has neither.
+    GIMM_CHECK_AS(FormatError, implicit || h.vr != "implicit",
+                  path << ": element " << h.tag() << " at byte " << at
+                       << " has no VR in an explicit VR data set");
+    const std::uint32_t tag = std::uint32_t(h.group) << 16 | h.element;
+    GIMM_CHECK_AS(FormatError, tag > previous_tag,
+                  path << ": element " << h.tag() << " at byte " << at << " follows " << previous
+                       << ": data set elements must ascend by tag");
+    previous_tag = tag;
+    previous = h.tag();
+    if (h.length == kUndefinedLength) {
+      const bool pixels = tag == 0x7FE00010u && (h.vr == "OB" || h.vr == "OW");
+      GIMM_CHECK_AS(FormatError, pixels || h.vr == "SQ" || h.vr == "UN" || h.vr == "implicit",
+                    path << ": element " << h.tag() << " (VR " << h.vr << ") at byte " << at
+                         << " has an undefined length, which only sequences and encapsulated "
+                            "pixel data may have");
+      // A UN sequence is implicit VR inside (PS3.5 6.2.2).
+      at = walk_items(bytes, h.value_at, end, true, implicit || h.vr == "UN", pixels, depth + 1,
+                      path);
+      continue;
+    }
+    GIMM_CHECK_AS(FormatError, h.value_at + h.length <= end,
+                  path << ": element " << h.tag() << " (VR " << h.vr << ") at byte " << at
+                       << " claims " << h.length << " bytes, past the end of the "
+                       << (end == bytes.size ? std::to_string(end) + "-byte file" : "item"));
+    if (h.vr == "SQ")
+      walk_items(bytes, h.value_at, h.value_at + h.length, false, implicit, false, depth + 1, path);
+    check_element_value(bytes, h, path);
+    at = h.value_at + h.length;
+  }
+}
+
+/// Walks the items of a sequence (or the fragments of encapsulated pixel data) from byte `at`:
+/// up to `end`, or, when `delimited`, up to the sequence delimiter (FFFE,E0DD). Returns the byte
+/// after it. Items of undefined length end at their item delimiter; fragments have a length.
+inline std::uint64_t walk_items(DicomBytes& bytes, std::uint64_t at, std::uint64_t end,
+                                bool delimited, bool implicit, bool fragments, int depth,
+                                const std::string& path) {
+  GIMM_CHECK_AS(
+      FormatError, depth <= kMaxSequenceDepth,
+      path << ": sequences nested deeper than " << kMaxSequenceDepth << " at byte " << at);
+  for (;;) {
+    if (!delimited && at == end) return at;
+    GIMM_CHECK_AS(FormatError, at + 8 <= end && bytes.read_at(at, 8),
+                  path << ": a sequence is cut off at byte " << at);
+    const std::uint16_t group = bytes.u16(0), element = bytes.u16(2);
+    const std::uint32_t length = bytes.u32(4);
+    if (delimited && group == 0xFFFE && element == 0xE0DD) return at + 8;
+    GIMM_CHECK_AS(FormatError, group == 0xFFFE && element == 0xE000,
+                  path << ": " << tag_string(group, element) << " at byte " << at
+                       << " inside a sequence, where an item (FFFE,E000) is expected");
+    if (length == kUndefinedLength) {
+      GIMM_CHECK_AS(FormatError, !fragments,
+                    path << ": pixel data fragment at byte " << at << " has an undefined length");
+      at = walk_data_set(bytes, at + 8, end, true, implicit, depth, path);
+      continue;
+    }
+    GIMM_CHECK_AS(FormatError, at + 8 + length <= end,
+                  path << ": item at byte " << at << " claims " << length
+                       << " bytes, past the end of its sequence or the file");
+    if (!fragments) walk_data_set(bytes, at + 8, at + 8 + length, false, implicit, depth, path);
+    at += 8 + length;
+  }
+}
+
+/// Walks a DICOM Part 10 file before GDCM reads it (the file meta group, then the data set in
+/// explicit or implicit VR little endian, into its sequences and encapsulated pixels), and
+/// refuses what would make GDCM abort or allocate what the file cannot hold: see
+/// walk_data_set. Why: Debian's GDCM is built with assertions, and such files abort the process
+/// inside GDCM instead of failing (docs/dev/fuzzing.md). Stricter than GDCM where GDCM guesses:
+/// the file meta group must follow "DICM", be explicit VR with defined lengths and name a
+/// known transfer syntax that is not the retired big endian one; the data set must not mix
+/// implicit into explicit VR, and its tags must ascend. A deflated data set and files without
+/// the "DICM" prefix are left to GDCM.
 inline void check_top_level_elements(const std::string& path) {
   DicomBytes bytes(path);
   const std::uint64_t size = bytes.size;
   if (size < 132 || !bytes.read_at(128, 4) || bytes.text(0, 4) != "DICM") return;
+  GIMM_CHECK_AS(FormatError, bytes.read_at(132, 2) && bytes.u16(0) == 0x0002,
+                path << ": no file meta group (0002,xxxx) after the \"DICM\" prefix at byte 132");
   std::string syntax;  // (0002,0010)
-  bool meta = true, implicit = false;
-  for (std::uint64_t at = 132; at + 8 <= size;) {
-    if (!bytes.read_at(at, 8)) return;
-    if (meta && bytes.u16(0) != 0x0002) {
-      meta = false;
-      if (syntax == "1.2.840.10008.1.2")
-        implicit = true;
-      else if (syntax == "1.2.840.10008.1.2.2" || syntax == "1.2.840.10008.1.2.1.99")
-        return;  // big endian, deflated
-    }
-    if (bytes.u16(0) == 0xFFFE) return;  // an item tag at the top level: GDCM's to judge
-    // (a meta group in implicit VR: GDCM reads it that way too)
-    const DicomElementHeader h = read_element_header(bytes, at, implicit, path);
-    if (h.length == 0xFFFFFFFFu) return;  // undefined length: not walked here
+  bool has_syntax = false;
+  std::uint64_t at = 132;
+  while (bytes.read_at(at, 8) && bytes.u16(0) == 0x0002) {
+    const DicomElementHeader h = read_element_header(bytes, at, false, path);
+    // PS3.10 7.1: explicit VR little endian (GDCM's reading of an implicit one asserts).
+    GIMM_CHECK_AS(FormatError, h.vr != "implicit",
+                  path << ": file meta element " << h.tag() << " at byte " << at
+                       << " has no VR: the file meta group must be explicit VR");
+    GIMM_CHECK_AS(FormatError, h.length != kUndefinedLength,
+                  path << ": file meta element " << h.tag() << " at byte " << at
+                       << " has an undefined length, which the file meta group cannot have");
     GIMM_CHECK_AS(FormatError, h.value_at + h.length <= size,
                   path << ": element " << h.tag() << " (VR " << h.vr << ") at byte " << at
                        << " claims " << h.length << " bytes, past the end of the " << size
                        << "-byte file");
-    if (meta) check_meta_group_length(bytes, h, path);
-    check_element_value(bytes, h, path);
-    if (meta && h.element == 0x0010 && h.length < 256)
+    check_meta_group_length(bytes, h, path);
+    if (h.element == 0x0010 && h.length < 256) {
       syntax = bytes.value_at(h.value_at, h.length);
+      has_syntax = true;
+    }
     at = h.value_at + h.length;
-    GIMM_CHECK_AS(FormatError, at == size || at + 8 <= size,
-                  path << ": " << size - at << " bytes after element " << h.tag()
-                       << " at the end of the file: too few for another element");
-    GIMM_CHECK_AS(FormatError, !(meta && at == size),
+    GIMM_CHECK_AS(FormatError, at + 8 <= size,
                   path << ": the file ends inside the file meta group (after " << h.tag()
                        << "): no data set");
   }
+  GIMM_CHECK_AS(FormatError, has_syntax,
+                path << ": the file meta group has no (0002,0010) TransferSyntaxUID");
+  // An unknown UID or big endian sends GDCM guessing (libFuzzer: a 2.9 GB allocation).
+  const auto ts = gdcm::TransferSyntax::GetTSType(syntax.c_str());
+  GIMM_CHECK_AS(FormatError, ts != gdcm::TransferSyntax::TS_END,
+                path << ": unknown transfer syntax (0002,0010) '" << syntax << "'");
+  GIMM_CHECK_AS(FormatError, ts != gdcm::TransferSyntax::ExplicitVRBigEndian,
+                path << ": transfer syntax " << syntax
+                     << " (explicit VR big endian) is retired; gimm does not read it");
+  if (ts == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian) return;  // GDCM inflates
+  walk_data_set(bytes, at, size, false, ts == gdcm::TransferSyntax::ImplicitVRLittleEndian, 0,
+                path);
 }
 
 /// `s` without leading and trailing blanks (DICOM pads values to an even length).
@@ -455,6 +571,18 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
                   << frame_bytes * std::size_t(out.frames));
   GIMM_CHECK(image.GetBufferLength() <= (std::size_t(1) << 32),
              path << ": " << image.GetBufferLength() << " bytes of pixels is more than 4 GiB");
+  // Before allocating: native pixels are in the file; compressed ones decode to at most
+  // kMaxDicomCompression times their size (a bound on what a forged header makes gimm allocate).
+  const std::uint64_t file_bytes = file_size_of(path);
+  const bool encapsulated = image.GetTransferSyntax().IsEncapsulated();
+  GIMM_CHECK(
+      image.GetBufferLength() <= file_bytes * (encapsulated ? detail::kMaxDicomCompression : 1),
+      path << ": " << cols << " x " << rows << " x " << out.frames << " frames of " << bytes
+           << "-byte pixels need " << image.GetBufferLength() << " bytes, more than the "
+           << file_bytes << "-byte file can hold"
+           << (encapsulated
+                   ? " at " + std::to_string(detail::kMaxDicomCompression) + ":1 compression"
+                   : std::string()));
   std::vector<char> buffer(image.GetBufferLength());
   GIMM_CHECK(image.GetBuffer(buffer.data()),
              path << ": GDCM could not decode the pixels (transfer syntax "
