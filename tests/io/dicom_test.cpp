@@ -499,6 +499,10 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
                           Catch::Contains("must ascend by tag"));
     // "DICM" followed by something else than the file meta group; a meta group without the
     // transfer syntax (0002,0010) (renamed (0002,0011), still in order).
+    std::string shifted = std::string(1, '\0') + bytes;  // "DICM" at byte 129
+    std::ofstream(tmp("shifted.dcm"), std::ios::binary) << shifted;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("shifted.dcm").string()),
+                      Catch::Contains("shifted.dcm") && Catch::Contains("no \"DICM\" prefix"));
     std::string no_meta = bytes;
     no_meta[132] = 0x08;
     std::ofstream(tmp("no_meta.dcm"), std::ios::binary) << no_meta;

@@ -321,12 +321,16 @@ inline std::uint64_t walk_items(DicomBytes& bytes, std::uint64_t at, std::uint64
 /// inside GDCM instead of failing (docs/dev/fuzzing.md). Stricter than GDCM where GDCM guesses:
 /// the file meta group must follow "DICM", be explicit VR with defined lengths and name a
 /// known transfer syntax that is not the retired big endian one; the data set must not mix
-/// implicit into explicit VR, and its tags must ascend. A deflated data set and files without
-/// the "DICM" prefix are left to GDCM.
+/// implicit into explicit VR, and its tags must ascend; files without the Part 10 "DICM" prefix
+/// are refused. Only a deflated data set is left to GDCM.
 inline void check_top_level_elements(const std::string& path) {
   DicomBytes bytes(path);
   const std::uint64_t size = bytes.size;
-  if (size < 132 || !bytes.read_at(128, 4) || bytes.text(0, 4) != "DICM") return;
+  // Without the prefix GDCM guesses an ACR-NEMA or raw data set (libFuzzer: 18 s and 1.6 GB on
+  // a 295-byte file); angiography systems write Part 10 files.
+  GIMM_CHECK_AS(FormatError, size >= 132 && bytes.read_at(128, 4) && bytes.text(0, 4) == "DICM",
+                path << ": not a DICOM file: no \"DICM\" prefix at byte 128 (gimm reads DICOM "
+                        "Part 10 files)");
   GIMM_CHECK_AS(FormatError, bytes.read_at(132, 2) && bytes.u16(0) == 0x0002,
                 path << ": no file meta group (0002,xxxx) after the \"DICM\" prefix at byte 132");
   std::string syntax;  // (0002,0010)
