@@ -394,19 +394,21 @@ int main(int argc, char** argv) {
   app.add_option("--camera-a", camera_a, "camera of A (JSON): gate with the exact F")
       ->check(CLI::ExistingFile);
   app.add_option("--camera-b", camera_b, "camera of B (JSON)")->check(CLI::ExistingFile);
-  app.add_option("--gate", gate, "epipolar gate: hard|soft|logit|none")
-      ->check(CLI::IsMember({"hard", "soft", "logit", "none"}))
-      ->capture_default_str();
+  app.add_option("--gate", gate,
+                 "epipolar gate: hard|soft|logit|none (default: the gate the weights record - "
+                 "the shipped ones: hard, 4 px, --snap - else hard)")
+      ->check(CLI::IsMember({"hard", "soft", "logit", "none"}));
   app.add_option("--tau", options.gate.tau, "soft/logit gate temperature, px")
       ->capture_default_str();
-  app.add_option("--delta", options.gate.delta_px, "hard gate threshold, px")
-      ->capture_default_str();
+  app.add_option("--delta", options.gate.delta_px,
+                 "hard gate threshold, px (default: the weights' record, else 2; 5 with DICOM)");
   auto* threshold_flag =
       app.add_option("--threshold", threshold,
                      "learned: coarse confidence a match needs, in [0, 1) (default: the value "
                      "the weights record)");
   app.add_flag("--snap", options.snap_to_epipolar,
-               "move each B point onto its epipolar line after gating (needs a gate)");
+               "move each B point onto its epipolar line after gating (needs a gate; default: "
+               "as the weights record)");
   auto* input_size_flag = app.add_option(
       "--input-size", input_size,
       "resize the longer side to N before matching (0: as is; default: the size the weights "
@@ -426,6 +428,13 @@ int main(int argc, char** argv) {
       if (threshold_flag->count()) network.set_threshold(threshold);
       GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
       options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
+      // The gate the weights were tuned with, where no flag says otherwise (real DICOM geometry
+      // keeps its own wider --delta default, set above).
+      gimm::GateChoice chosen;
+      if (app.count("--gate")) chosen.mode = options.gate.mode;
+      if (app.count("--delta") || !dicom_a.empty()) chosen.delta_px = options.gate.delta_px;
+      if (app.count("--snap")) chosen.snap = options.snap_to_epipolar;
+      gimm::apply_gate_choice(network.config(), chosen, options);
       return network;
     };
     // A flag of one method given to another would be silently ignored: refuse it instead.

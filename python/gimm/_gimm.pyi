@@ -224,9 +224,9 @@ class Matcher:
     def input_size(self) -> int: ...
     def match(self, image_a: np.ndarray, image_b: np.ndarray, class_a: int = 0, class_b: int = 0,
               camera_a: Optional[_CameraLike] = None, camera_b: Optional[_CameraLike] = None, *,
-              gate: _Gate = "hard", tau: float = 2.0, delta_px: float = 2.0, top_k: int = 256,
-              min_matches: int = 32, input_size: Optional[int] = None,
-              snap_to_epipolar: bool = False) -> Dict[str, Any]: ...
+              gate: Optional[_Gate] = None, tau: float = 2.0, delta_px: Optional[float] = None,
+              top_k: int = 256, min_matches: int = 32, input_size: Optional[int] = None,
+              snap_to_epipolar: Optional[bool] = None) -> Dict[str, Any]: ...
 
 
 def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraLike,

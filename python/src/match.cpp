@@ -169,21 +169,23 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
           "match",
           [](const nn::Matcher& net, const py::handle& image_a, const py::handle& image_b,
              int class_a, int class_b, const py::object& camera_a, const py::object& camera_b,
-             const std::string& gate, double tau, double delta_px, int top_k, int min_matches,
-             const py::object& input_size, bool snap_to_epipolar) {
+             const py::object& gate, double tau, const py::object& delta_px, int top_k,
+             int min_matches, const py::object& input_size, const py::object& snap_to_epipolar) {
             const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
             const Image<float> b = image_from<float>(image_b, Accept::floating, "image_b");
             std::optional<Camerad> ca, cb;
             if (!camera_a.is_none()) ca = camera_of(camera_a, "camera_a");
             if (!camera_b.is_none()) cb = camera_of(camera_b, "camera_b");
             MatchOptions o;
-            o.gate.mode = parse_gate_mode(gate);
             o.gate.tau = tau;
-            o.gate.delta_px = delta_px;
             o.gate.top_k = top_k;
             o.gate.min_matches = min_matches;
             o.input_size = input_size.is_none() ? net.config().input_size : input_size.cast<int>();
-            o.snap_to_epipolar = snap_to_epipolar;
+            GateChoice chosen;  // None: what the weights record (as gimm-match without the flag)
+            if (!gate.is_none()) chosen.mode = parse_gate_mode(gate.cast<std::string>());
+            if (!delta_px.is_none()) chosen.delta_px = delta_px.cast<double>();
+            if (!snap_to_epipolar.is_none()) chosen.snap = snap_to_epipolar.cast<bool>();
+            apply_gate_choice(net.config(), chosen, o);
             PairMatchResult r;
             {
               py::gil_scoped_release release;
@@ -200,9 +202,9 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
           },
           py::arg("image_a"), py::arg("image_b"), py::arg("class_a") = 0, py::arg("class_b") = 0,
           py::arg("camera_a") = py::none(), py::arg("camera_b") = py::none(), py::kw_only(),
-          py::arg("gate") = "hard", py::arg("tau") = 2.0, py::arg("delta_px") = 2.0,
+          py::arg("gate") = py::none(), py::arg("tau") = 2.0, py::arg("delta_px") = py::none(),
           py::arg("top_k") = 256, py::arg("min_matches") = 32, py::arg("input_size") = py::none(),
-          py::arg("snap_to_epipolar") = false, R"doc(
+          py::arg("snap_to_epipolar") = py::none(), R"doc(
 Matches coronary points between two angiograms, as gimm-match does for one pair.
 
 image_a, image_b: float (rows, cols) in [0, 1], bright background and dark vessels (render()'s
@@ -210,7 +212,9 @@ image_a, image_b: float (rows, cols) in [0, 1], bright background and dark vesse
 view_class_from_angles). camera_a, camera_b: both or neither (Camera or CArm); with them the gate
 uses their exact F, without it F is estimated from the matches (gate_reference). gate: 'hard'
 (drops matches farther than delta_px from their epipolar lines), 'soft', 'logit' (rescale by
-tau), 'none'. input_size: the longer side the images are resized to, None: the weights'
+tau), 'none'. gate, delta_px, snap_to_epipolar (move B points onto their epipolar lines):
+None takes what the weights record (the shipped ones: 'hard', 4 px, snapping), else 'hard',
+2 px, no snapping, as gimm-match without those flags. input_size: the longer side the images are resized to, None: the weights'
 (gimm-match's default), 0: the images' own size.
 Returns dict(points_a, points_b (N, 2) pixels (u, v) with centres at integers, confidence (N,),
 F (3, 3) with x_b^T F x_a = 0 or None, F_source 'cameras' | 'matches' | 'none',

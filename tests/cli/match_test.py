@@ -91,6 +91,37 @@ if len(results) == 3:
     check(np.allclose(soft["confidence"], expected_soft, rtol=1e-6, atol=1e-12),
           "soft confidences are not c exp(-d^2 / tau^2)")
 
+# The shipped weights record their tuned gate (hard 4 px + snap, weights/README.md): a field no
+# flag sets takes the recorded value. On a one-patient dataset like the main job's (the weights
+# find nothing on the small 156 x 132 pair above).
+SHIPPED = os.path.join(ROOT, "weights", "gimm-phantom-128.safetensors")
+DS = os.path.join(TMP, "ds_shipped")
+run("gimm-dataset", "--phantom", 1, "--rows", 256, "--cols", 256, "--pixel", 1.0, "--out", DS)
+
+
+def shipped_matches(name, *flags):
+    out = os.path.join(TMP, "shipped_" + name)
+    run("gimm-match", "--dataset", DS, "--weights", SHIPPED, *flags, "--out", out)
+    found = {}
+    for folder, _, files in os.walk(out):
+        for f in files:
+            if f.endswith(".json"):
+                found[os.path.relpath(os.path.join(folder, f), out)] = load(os.path.join(folder, f))
+    return found
+
+
+default = shipped_matches("default")
+check(sum(len(m.get("points_a", [])) for m in default.values()) > 0,
+      "shipped weights found no match on the one-patient dataset")
+check(default == shipped_matches("explicit", "--gate", "hard", "--delta", 4, "--snap"),
+      "no gate flags: not the recorded gate (hard 4 px + snap)")
+no_snap = shipped_matches("no_snap", "--snap=false")
+check(no_snap == shipped_matches("explicit_no_snap", "--gate", "hard", "--delta", 4, "--snap=false"),
+      "--snap=false did not turn the recorded snap off alone")
+check(default != no_snap, "the recorded snap changed nothing")
+check(default == shipped_matches("gate_only", "--gate", "hard"),
+      "--gate alone dropped the recorded delta or snap")
+
 # Without cameras: F from the matches (reference); with resizing; with a picture.
 run("gimm-match", *base, "--gate", "hard", "--out", os.path.join(TMP, "m_ref.json"))
 p = run("gimm-match", *base, *cams, "--input-size", 64, "--out", os.path.join(TMP, "m_small.json"),

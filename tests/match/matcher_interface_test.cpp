@@ -167,6 +167,42 @@ TEST_CASE("Learned matcher: images of different sizes map back per image", "[mat
                     Catch::Contains("camera B") && Catch::Contains("image B"));
 }
 
+TEST_CASE("Learned matcher: each gate setting left unset is what the weights record", "[match]") {
+  const auto resolved = [](const gimm::nn::MatcherConfig& weights, const gimm::GateChoice& c) {
+    gimm::MatchOptions o;
+    gimm::apply_gate_choice(weights, c, o);
+    return o;
+  };
+  gimm::nn::MatcherConfig none_recorded;
+  const gimm::MatchOptions plain = resolved(none_recorded, {});
+  CHECK(plain.gate.mode == gimm::GateMode::hard);
+  CHECK(plain.gate.delta_px == gimm::MatchOptions{}.gate.delta_px);
+  CHECK_FALSE(plain.snap_to_epipolar);
+
+  gimm::nn::MatcherConfig tuned;
+  tuned.gate_mode = "soft";
+  tuned.gate_delta_px = 4.0;
+  tuned.gate_snap = true;
+  const gimm::MatchOptions recorded = resolved(tuned, {});
+  CHECK(recorded.gate.mode == gimm::GateMode::soft);
+  CHECK(recorded.gate.delta_px == 4.0);
+  CHECK(recorded.snap_to_epipolar);
+
+  gimm::GateChoice chosen;
+  chosen.delta_px = 7.0;
+  chosen.snap = false;
+  const gimm::MatchOptions mixed = resolved(tuned, chosen);
+  CHECK(mixed.gate.mode == gimm::GateMode::soft);  // still the record
+  CHECK(mixed.gate.delta_px == 7.0);
+  CHECK_FALSE(mixed.snap_to_epipolar);
+  // No gate, no F to snap onto: the recorded snap does not apply; an explicit one is kept.
+  gimm::GateChoice off;
+  off.mode = gimm::GateMode::none;
+  CHECK_FALSE(resolved(tuned, off).snap_to_epipolar);
+  off.snap = true;
+  CHECK(resolved(tuned, off).snap_to_epipolar);
+}
+
 TEST_CASE("Reconstruction: exact matches triangulate to their points; off ones are dropped",
           "[match]") {
   gimm::CArm carm;

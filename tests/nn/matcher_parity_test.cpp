@@ -185,6 +185,28 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/heads.safetensors"),
                     Catch::Contains("'coarse_heads' must be an integer, got 4.9"));
 
+  // The recorded gate: read back, and refused when malformed, naming the key or value.
+  const auto with_gate = [&](const std::string& gate) {
+    const auto at = config.rfind('}');
+    meta["gimm_config"] = config.substr(0, at) + ", \"gate\": " + gate + "}";
+    gimm::nn::write_safetensors(dir + "/gate.safetensors", all, meta);
+    return gimm::nn::load_matcher(dir + "/gate.safetensors");
+  };
+  meta["gimm_config"] = config;  // written before the gate existed: none recorded
+  gimm::nn::write_safetensors(dir + "/nogate.safetensors", all, meta);
+  CHECK(gimm::nn::load_matcher(dir + "/nogate.safetensors").config().gate_mode.empty());
+  const auto gated = with_gate(R"({"mode": "hard", "delta_px": 4, "snap": true})").config();
+  CHECK(gated.gate_mode == "hard");
+  CHECK(gated.gate_delta_px == 4.0);
+  CHECK(gated.gate_snap);
+  CHECK_THROWS_WITH(with_gate(R"({"mode": "tight"})"),
+                    Catch::Contains("gate mode must be hard|soft|logit|none, got 'tight'"));
+  CHECK_THROWS_WITH(with_gate(R"({"mode": "hard", "delta_px": -1})"),
+                    Catch::Contains("delta_px must be > 0, got -1"));
+  CHECK_THROWS_WITH(with_gate(R"({"mode": "hard", "delta_px": 4, "snap": "yes"})"),
+                    Catch::Contains("'snap' has the wrong type"));
+  CHECK_THROWS_WITH(with_gate(R"("hard")"), Catch::Contains("'gate' must be an object"));
+
   meta["gimm_config"] = "{not json";
   gimm::nn::write_safetensors(dir + "/badjson.safetensors", all, meta);
   CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/badjson.safetensors"),

@@ -136,8 +136,8 @@ TEST_CASE("Patient: a single-tree label fails naming the flag, or makes that sys
   for (const auto& e : fs::directory_iterator(pdir / "views"))
     views += e.path().filename().string().find(".camera.json") != std::string::npos;
   CHECK(views == 7);
-  for (const auto& b : read_json_file(pdir / "centerlines.json")["branches"])
-    CHECK(b["system"] == "LCA");
+  const json centerlines = read_json_file(pdir / "centerlines.json");
+  for (const auto& b : centerlines["branches"]) CHECK(b["system"] == "LCA");
   CHECK(read_json_file(pdir / "done.json")["run"]["parameters"]["allow_single_system"] == true);
 }
 

@@ -120,10 +120,18 @@ class Matching(unittest.TestCase):
             self.assertTrue(np.isfinite(out[key]).all(), key)
         self.assertEqual(out["F_source"], "cameras")
         np.testing.assert_allclose(out["F"], gimm.fundamental_from_cameras(a, b))
+        # The shipped weights' recorded gate by default: hard 4 px, then B snapped onto its line.
         d2 = gimm.symmetric_epipolar_distance_sq(out["F"], out["points_a"], out["points_b"])
-        self.assertLessEqual(d2.max(), 4.0 + 1e-9)  # the hard gate: <= 2 px
+        self.assertLessEqual(d2.max(), 1e-6)
         self.assertEqual(n + out["dropped_by_gate"] + out["dropped_in_padding"],
                          out["network_matches"])
+        # Each argument given overrides its recorded value.
+        tight = self.matcher.match(ia, ib, 8, 10, a.camera(), b.camera(), delta_px=2.0,
+                                   snap_to_epipolar=False)
+        d2 = gimm.symmetric_epipolar_distance_sq(tight["F"], tight["points_a"], tight["points_b"])
+        self.assertLessEqual(d2.max(), 4.0 + 1e-9)  # the hard gate: <= 2 px
+        self.assertGreater(d2.max(), 1e-6)  # not snapped
+        self.assertGreater(tight["dropped_by_gate"], out["dropped_by_gate"])
         self.assertTrue(is_capsule_view(out["confidence"]))
         # Without cameras: F from the matches (or none), nothing dropped by a gate off.
         free = self.matcher.match(ia, ib, 8, 10, gate="none")

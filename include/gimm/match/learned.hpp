@@ -39,6 +39,32 @@ struct MatchOptions {
   bool snap_to_epipolar = false;
 };
 
+/// The gate settings a caller chose; each one left unset is what the weights record (their
+/// "gate", tuned on validation pairs), else MatchOptions' default. gimm-match's flags and the
+/// Python Matcher both resolve their defaults here.
+struct GateChoice {
+  std::optional<GateMode> mode;
+  std::optional<double> delta_px;
+  std::optional<bool> snap;
+};
+
+inline void apply_gate_choice(const nn::MatcherConfig& weights, const GateChoice& chosen,
+                              MatchOptions& options) {
+  const bool recorded = !weights.gate_mode.empty();
+  if (chosen.mode)
+    options.gate.mode = *chosen.mode;
+  else if (recorded)
+    options.gate.mode = parse_gate_mode(weights.gate_mode);
+  if (chosen.delta_px)
+    options.gate.delta_px = *chosen.delta_px;
+  else if (recorded && weights.gate_delta_px > 0)
+    options.gate.delta_px = weights.gate_delta_px;
+  if (chosen.snap)
+    options.snap_to_epipolar = *chosen.snap;
+  else if (recorded)  // snapping needs a gate's F; without a gate the record does not apply
+    options.snap_to_epipolar = weights.gate_snap && options.gate.mode != GateMode::none;
+}
+
 /// The point of the line l = (l1, l2, l3) (l1 u + l2 v + l3 = 0) nearest to p.
 inline Eigen::Vector2d foot_on_line(const Eigen::Vector3d& l, const Eigen::Vector2d& p) {
   const double n2 = l.x() * l.x() + l.y() * l.y();

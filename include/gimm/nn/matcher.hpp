@@ -50,6 +50,11 @@ struct MatcherConfig {
   /// The longer image side (pixels) the weights were trained at; gimm-match resizes to it
   /// unless told otherwise. 0: not recorded (run at the image's own size).
   int input_size = 0;
+  /// The epipolar gate the weights were tuned with (chosen on a tuning split, weights/README.md);
+  /// gimm-match uses it unless --gate/--delta/--snap say otherwise. Empty: not recorded.
+  std::string gate_mode;
+  double gate_delta_px = 0;  ///< hard gate threshold, px
+  bool gate_snap = false;    ///< B points moved onto their epipolar lines
 
   std::int64_t coarse_dim() const { return widths[2]; }
   std::int64_t fine_dim() const { return widths[0]; }
@@ -76,6 +81,11 @@ struct MatcherConfig {
     GIMM_CHECK(
         input_size >= 0 && input_size % 8 == 0 && input_size <= 8192,
         "matcher config: input_size must be 0 or a multiple of 8 up to 8192, got " << input_size);
+    GIMM_CHECK(gate_mode.empty() || gate_mode == "hard" || gate_mode == "soft" ||
+                   gate_mode == "logit" || gate_mode == "none",
+               "matcher config: gate mode must be hard|soft|logit|none, got '" << gate_mode << "'");
+    GIMM_CHECK(gate_mode != "hard" || (std::isfinite(gate_delta_px) && gate_delta_px > 0),
+               "matcher config: gate delta_px must be > 0, got " << gate_delta_px);
   }
 };
 

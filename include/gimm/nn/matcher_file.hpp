@@ -71,6 +71,15 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   c.window = config_value<int>(j, "window", where);
   if (j.contains("anchor")) c.anchor = config_value<bool>(j, "anchor", where);
   if (j.contains("input_size")) c.input_size = config_value<int>(j, "input_size", where);
+  if (j.contains("gate")) {  // {"mode": "hard", "delta_px": 4, "snap": true}; absent in older files
+    const auto gate = config_value<nlohmann::json>(j, "gate", where);
+    GIMM_CHECK_AS(FormatError, gate.is_object(),
+                  where << ": 'gate' must be an object, got " << gate.dump());
+    c.gate_mode = config_value<std::string>(gate, "mode", where + " gate");
+    if (gate.contains("delta_px"))
+      c.gate_delta_px = config_value<double>(gate, "delta_px", where + " gate");
+    if (gate.contains("snap")) c.gate_snap = config_value<bool>(gate, "snap", where + " gate");
+  }
   try {
     c.validate();
   } catch (const Error& e) {

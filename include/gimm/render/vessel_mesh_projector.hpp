@@ -40,48 +40,21 @@ struct MeshRayResult {
 class VesselMeshProjector final : public VesselSurface {
  public:
   explicit VesselMeshProjector(const TriangleMesh& mesh) {
-    GIMM_CHECK(!mesh.triangles.empty(), "VesselMeshProjector: the vessel mesh is empty");
-    device_ = rtcNewDevice("threads=1");  // gimm parallelises over rays itself (OpenMP)
+    check_mesh(mesh);  // before any Embree object exists, so a bad mesh allocates nothing
+    device_.reset(rtcNewDevice("threads=1"));  // gimm parallelises over rays itself (OpenMP)
     GIMM_CHECK(device_ != nullptr, "VesselMeshProjector: Embree device creation failed (error "
                                        << rtcGetDeviceError(nullptr) << ")");
-    scene_ = rtcNewScene(device_);
-    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);  // watertight: no rays slip through edges
-    RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                3 * sizeof(float), mesh.vertices.size()));
-    auto* indices = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                3 * sizeof(unsigned), mesh.triangles.size()));
-    GIMM_CHECK(vertices && indices, "VesselMeshProjector: Embree buffer allocation failed");
-    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-      for (int a = 0; a < 3; ++a) vertices[3 * v + a] = mesh.vertices[v][a];
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int a = 0; a < 3; ++a) {
-        GIMM_CHECK(mesh.triangles[t][a] < mesh.vertices.size(),
-                   "VesselMeshProjector: triangle " << t << " indexes vertex "
-                                                    << mesh.triangles[t][a] << " of "
-                                                    << mesh.vertices.size());
-        indices[3 * t + a] = mesh.triangles[t][a];
-      }
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometry(scene_, geometry);
-    rtcReleaseGeometry(geometry);
-    rtcCommitScene(scene_);
-    GIMM_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE,
+    scene_.reset(rtcNewScene(device_.get()));
+    rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);  // watertight: no rays slip through
+    attach_triangles(mesh);
+    rtcCommitScene(scene_.get());
+    GIMM_CHECK(rtcGetDeviceError(device_.get()) == RTC_ERROR_NONE,
                "VesselMeshProjector: Embree scene build failed");
   }
   VesselMeshProjector(const VesselMeshProjector&) = delete;
   VesselMeshProjector& operator=(const VesselMeshProjector&) = delete;
-  VesselMeshProjector(VesselMeshProjector&& other) noexcept
-      : device_(other.device_), scene_(other.scene_) {
-    other.device_ = nullptr;
-    other.scene_ = nullptr;
-  }
-  ~VesselMeshProjector() {
-    if (scene_) rtcReleaseScene(scene_);
-    if (device_) rtcReleaseDevice(device_);
-  }
+  VesselMeshProjector(VesselMeshProjector&&) noexcept = default;
+  VesselMeshProjector& operator=(VesselMeshProjector&&) noexcept = default;
 
   /// Traces one world ray (unit direction, s in mm from its origin, s >= 0), up to
   /// `max_distance` mm (a passage still open there counts up to that point).
@@ -104,7 +77,7 @@ class VesselMeshProjector final : public VesselSurface {
       hit.ray.tfar = static_cast<float>(max_distance);
       hit.ray.mask = 0xFFFFFFFFu;
       hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene_, &context, &hit);
+      rtcIntersect1(scene_.get(), &context, &hit);
       if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
       const double t = hit.ray.tfar;
       const double facing = hit.hit.Ng_x * ray.direction.x() + hit.hit.Ng_y * ray.direction.y() +
@@ -157,8 +130,48 @@ class VesselMeshProjector final : public VesselSurface {
   }
 
  private:
-  RTCDevice device_ = nullptr;
-  RTCScene scene_ = nullptr;
+  static void check_mesh(const TriangleMesh& mesh) {
+    GIMM_CHECK(!mesh.triangles.empty(), "VesselMeshProjector: the vessel mesh is empty");
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int a = 0; a < 3; ++a)
+        GIMM_CHECK(mesh.triangles[t][a] < mesh.vertices.size(),
+                   "VesselMeshProjector: triangle " << t << " indexes vertex "
+                                                    << mesh.triangles[t][a] << " of "
+                                                    << mesh.vertices.size());
+  }
+
+  void attach_triangles(const TriangleMesh& mesh) {
+    const std::unique_ptr<RTCGeometryTy, GeometryRelease> geometry(
+        rtcNewGeometry(device_.get(), RTC_GEOMETRY_TYPE_TRIANGLE));
+    GIMM_CHECK(geometry != nullptr, "VesselMeshProjector: Embree geometry creation failed");
+    auto* vertices = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                3 * sizeof(float), mesh.vertices.size()));
+    auto* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(unsigned), mesh.triangles.size()));
+    GIMM_CHECK(vertices && indices, "VesselMeshProjector: Embree buffer allocation failed");
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+      for (int a = 0; a < 3; ++a) vertices[3 * v + a] = mesh.vertices[v][a];
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int a = 0; a < 3; ++a) indices[3 * t + a] = mesh.triangles[t][a];
+    rtcCommitGeometry(geometry.get());
+    rtcAttachGeometry(scene_.get(), geometry.get());  // the scene holds its own reference
+  }
+
+  // Owning handles: a constructor that throws half-way still releases what it made, and
+  // the scene (declared last) is released before its device.
+  struct DeviceRelease {
+    void operator()(RTCDevice d) const { rtcReleaseDevice(d); }
+  };
+  struct SceneRelease {
+    void operator()(RTCScene s) const { rtcReleaseScene(s); }
+  };
+  struct GeometryRelease {
+    void operator()(RTCGeometry g) const { rtcReleaseGeometry(g); }
+  };
+  std::unique_ptr<RTCDeviceTy, DeviceRelease> device_;
+  std::unique_ptr<RTCSceneTy, SceneRelease> scene_;
 };
 
 /// The Embree surface of a binary vessel mask (mesh_from_mask with its defaults), for
