@@ -99,9 +99,9 @@ DS = os.path.join(TMP, "ds_shipped")
 run("gimm-dataset", "--phantom", 1, "--rows", 256, "--cols", 256, "--pixel", 1.0, "--out", DS)
 
 
-def shipped_matches(name, *flags):
+def shipped_matches(name, *flags, weights=SHIPPED):
     out = os.path.join(TMP, "shipped_" + name)
-    run("gimm-match", "--dataset", DS, "--weights", SHIPPED, *flags, "--out", out)
+    run("gimm-match", "--dataset", DS, "--weights", weights, *flags, "--out", out)
     found = {}
     for folder, _, files in os.walk(out):
         for f in files:
@@ -121,6 +121,23 @@ check(no_snap == shipped_matches("explicit_no_snap", "--gate", "hard", "--delta"
 check(default != no_snap, "the recorded snap changed nothing")
 check(default == shipped_matches("gate_only", "--gate", "hard"),
       "--gate alone dropped the recorded delta or snap")
+
+# tools/train/record_gate.py writes the record gimm-match then follows; bad input changes nothing.
+RECORD = os.path.join(ROOT, "tools", "train", "record_gate.py")
+regated = os.path.join(TMP, "regated.safetensors")
+shutil.copy(SHIPPED, regated)
+run("/usr/bin/python3", RECORD, regated, "--gate", "hard", "--delta", 3)
+check(shipped_matches("regated", weights=regated)
+      == shipped_matches("regated_explicit", "--gate", "hard", "--delta", 3, "--snap=false"),
+      "record_gate.py --gate hard --delta 3: gimm-match did not follow the new record")
+with open(regated, "rb") as f:
+    before = f.read()
+for bad in (["--gate", "hard"], ["--gate", "hard", "--delta", -1], ["--gate", "none", "--snap"]):
+    run("/usr/bin/python3", RECORD, regated, *bad, ok=False, contains="error")
+run("/usr/bin/python3", RECORD, WEIGHTS + ".missing", "--gate", "none", ok=False,
+    contains="error: record_gate.py")
+with open(regated, "rb") as f:
+    check(f.read() == before, "record_gate.py changed the weights on bad arguments")
 
 # Without cameras: F from the matches (reference); with resizing; with a picture.
 run("gimm-match", *base, "--gate", "hard", "--out", os.path.join(TMP, "m_ref.json"))

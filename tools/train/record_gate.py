@@ -28,7 +28,10 @@ def main():
         parser.error(f"--gate hard needs --delta > 0, got {args.delta}")
     if args.snap and args.gate == "none":
         parser.error("--snap needs a gate, got --gate none")
-    tensors, meta = load_file(args.weights)
+    try:
+        tensors, meta = load_file(args.weights)
+    except (OSError, ValueError) as e:
+        sys.exit(f"error: record_gate.py: {e}")
     if "gimm_config" not in meta:
         sys.exit(f"error: record_gate.py: {args.weights}: no gimm_config in __metadata__")
     config = json.loads(meta["gimm_config"])
@@ -36,9 +39,7 @@ def main():
     if args.delta is not None:
         config["gate"]["delta_px"] = args.delta
     meta["gimm_config"] = json.dumps(config, sort_keys=True)
-    tmp = args.weights + ".tmp"
-    save_file(tmp, tensors, meta)
-    os.replace(tmp, args.weights)  # all or nothing
+    save_file(args.weights, tensors, meta)  # atomic: a temporary file, then a rename
     print(f"record_gate: {args.weights}: gate {config['gate']}")
 
 
