@@ -584,6 +584,23 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     std::ofstream(tmp("samples.dcm"), std::ios::binary) << many_samples;
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("samples.dcm").string()),
                       Catch::Contains("(0028,0002)") && Catch::Contains("is 9"));
+    // Columns (0028,0011) as UL, and Rows (0028,0010) as a 4-byte US (found by libFuzzer: an
+    // assertion in GDCM's ImageHelper::GetDimensionsValue).
+    const auto columns = bytes.find(std::string("\x28\x00\x11\x00US\x02\x00", 8));
+    REQUIRE(columns != std::string::npos);
+    std::string columns_ul = bytes;
+    columns_ul[columns + 5] = 'L';
+    std::ofstream(tmp("columns_ul.dcm"), std::ios::binary) << columns_ul;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("columns_ul.dcm").string()),
+                      Catch::Contains("columns_ul.dcm") && Catch::Contains("(0028,0011)") &&
+                          Catch::Contains("VR UL"));
+    const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));
+    REQUIRE(rows != std::string::npos);
+    std::string rows_long = bytes;  // 4 bytes: the value and the next element's first two
+    rows_long[rows + 6] = 4;
+    std::ofstream(tmp("rows_long.dcm"), std::ios::binary) << rows_long;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("rows_long.dcm").string()),
+                      Catch::Contains("(0028,0010)") && Catch::Contains("4 bytes"));
     std::ofstream(tmp("tail.dcm"), std::ios::binary) << bytes << "tail";
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("tail.dcm").string()),
                       Catch::Contains("tail.dcm") && Catch::Contains("4 bytes after element") &&

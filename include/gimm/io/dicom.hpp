@@ -202,10 +202,25 @@ inline void check_meta_group_length(DicomBytes& bytes, const DicomElementHeader&
                      << " bytes and needs a data set after it");
 }
 
-/// Values GDCM checks with assertions: SamplesPerPixel (it asserts <= 4; gimm reads 1) and the
-/// retired ACR-NEMA RecognitionCode (0008,0010) (it asserts the value starts "ACR-NEMA").
+/// The image pixel module's one-number attributes (PS3.3 C.7.6.3), which GDCM reads as US and
+/// asserts on when their VR or length is another: samples per pixel, planar configuration,
+/// rows, columns, bits allocated and stored, high bit, pixel representation.
+inline bool is_image_pixel_us(const DicomElementHeader& h) {
+  if (h.group != 0x0028) return false;
+  for (const std::uint16_t e : {0x0002, 0x0006, 0x0010, 0x0011, 0x0100, 0x0101, 0x0102, 0x0103})
+    if (h.element == e) return true;
+  return false;
+}
+
+/// Values GDCM checks with assertions: the image pixel module's VR and length (above),
+/// SamplesPerPixel (it asserts <= 4; gimm reads 1) and the retired ACR-NEMA RecognitionCode
+/// (0008,0010) (it asserts the value starts "ACR-NEMA").
 inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
                                 const std::string& path) {
+  if (is_image_pixel_us(h))
+    GIMM_CHECK_AS(FormatError, (h.vr == "US" || h.vr == "implicit") && h.length == 2,
+                  path << ": element " << h.tag() << " has VR " << h.vr << " and " << h.length
+                       << " bytes; an image pixel attribute is one US (2 bytes)");
   if (h.group == 0x0008 && h.element == 0x0010) {
     const std::string code = bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 8));
     GIMM_CHECK_AS(FormatError, code == "ACR-NEMA",
