@@ -594,7 +594,15 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("columns_ul.dcm").string()),
                       Catch::Contains("columns_ul.dcm") && Catch::Contains("(0028,0011)") &&
                           Catch::Contains("VR UL"));
+    // Rows renamed NumberOfFrames (0028,0008), so an IS element with VR US (libFuzzer again:
+    // an assertion in GDCM's Attribute<0028,0008>::SetFromDataElement).
     const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));
+    REQUIRE(rows != std::string::npos);
+    std::string frames_us = bytes;
+    frames_us[rows + 2] = 0x08;
+    std::ofstream(tmp("frames_us.dcm"), std::ios::binary) << frames_us;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("frames_us.dcm").string()),
+                      Catch::Contains("(0028,0008)") && Catch::Contains("VR US"));
     REQUIRE(rows != std::string::npos);
     std::string rows_long = bytes;  // 4 bytes: the value and the next element's first two
     rows_long[rows + 6] = 4;

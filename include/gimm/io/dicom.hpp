@@ -212,7 +212,8 @@ inline bool is_image_pixel_us(const DicomElementHeader& h) {
   return false;
 }
 
-/// Values GDCM checks with assertions: the image pixel module's VR and length (above),
+/// Values GDCM checks with assertions: the image pixel module's VR and length (above) and
+/// NumberOfFrames' (IS),
 /// SamplesPerPixel (it asserts <= 4; gimm reads 1) and the retired ACR-NEMA RecognitionCode
 /// (0008,0010) (it asserts the value starts "ACR-NEMA").
 inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
@@ -221,6 +222,10 @@ inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
     GIMM_CHECK_AS(FormatError, (h.vr == "US" || h.vr == "implicit") && h.length == 2,
                   path << ": element " << h.tag() << " has VR " << h.vr << " and " << h.length
                        << " bytes; an image pixel attribute is one US (2 bytes)");
+  if (h.group == 0x0028 && h.element == 0x0008)  // NumberOfFrames, read by the same GDCM code
+    GIMM_CHECK_AS(FormatError, (h.vr == "IS" || h.vr == "implicit") && h.length <= 12,
+                  path << ": element (0028,0008) NumberOfFrames has VR " << h.vr << " and "
+                       << h.length << " bytes; it is one IS (at most 12 bytes)");
   if (h.group == 0x0008 && h.element == 0x0010) {
     const std::string code = bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 8));
     GIMM_CHECK_AS(FormatError, code == "ACR-NEMA",
