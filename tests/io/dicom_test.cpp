@@ -594,6 +594,21 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("columns_ul.dcm").string()),
                       Catch::Contains("columns_ul.dcm") && Catch::Contains("(0028,0011)") &&
                           Catch::Contains("VR UL"));
+    // A presentation state's SOP class (known to GDCM, not an image) in the file meta group,
+    // an unknown one in the data set (libFuzzer: an assertion in PixmapReader::Read).
+    for (const auto& [tag, element] :
+         {std::pair<std::string, std::string>{std::string("\x02\x00\x02\x00UI", 6), "(0002,0002)"},
+          {std::string("\x08\x00\x16\x00UI", 6), "(0008,0016)"}}) {
+      const auto sop_class = bytes.find(tag + std::string("\x1c\x00", 2));
+      REQUIRE(sop_class != std::string::npos);
+      std::string other = bytes;  // ...1.12.1 (XA) -> ...1.11.1 (GSPS)
+      REQUIRE(other.compare(sop_class + 8, 28, "1.2.840.10008.5.1.4.1.1.12.1") == 0);
+      other[sop_class + 8 + 25] = '1';
+      std::ofstream(tmp("sop_class.dcm"), std::ios::binary) << other;
+      CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("sop_class.dcm").string()),
+                        Catch::Contains("sop_class.dcm") && Catch::Contains(element) &&
+                            Catch::Contains("not an image storage class"));
+    }
     // Rows renamed NumberOfFrames (0028,0008), so an IS element with VR US (libFuzzer again:
     // an assertion in GDCM's Attribute<0028,0008>::SetFromDataElement).
     const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));

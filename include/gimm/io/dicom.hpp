@@ -222,6 +222,18 @@ inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
     GIMM_CHECK_AS(FormatError, (h.vr == "US" || h.vr == "implicit") && h.length == 2,
                   path << ": element " << h.tag() << " has VR " << h.vr << " and " << h.length
                        << " bytes; an image pixel attribute is one US (2 bytes)");
+  // The SOP class, from the file meta group or the data set: GDCM picks its reading path by it
+  // and asserts when a known class is not an image (libFuzzer: a presentation state's UID).
+  if ((h.group == 0x0002 && h.element == 0x0002) || (h.group == 0x0008 && h.element == 0x0016)) {
+    std::string uid = bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 64));
+    while (!uid.empty() && (uid.back() == '\0' || uid.back() == ' ')) uid.pop_back();
+    const auto storage = gdcm::MediaStorage::GetMSType(uid.c_str());
+    GIMM_CHECK_AS(FormatError,
+                  storage != gdcm::MediaStorage::MS_END && gdcm::MediaStorage::IsImage(storage),
+                  path << ": element " << h.tag() << " SOP class '" << uid
+                       << "' is not an image storage class (X-ray angiography is "
+                          "1.2.840.10008.5.1.4.1.1.12.1)");
+  }
   if (h.group == 0x0028 && h.element == 0x0008)  // NumberOfFrames, read by the same GDCM code
     GIMM_CHECK_AS(FormatError, (h.vr == "IS" || h.vr == "implicit") && h.length <= 12,
                   path << ": element (0028,0008) NumberOfFrames has VR " << h.vr << " and "
@@ -370,6 +382,7 @@ inline void check_top_level_elements(const std::string& path) {
                        << " claims " << h.length << " bytes, past the end of the " << size
                        << "-byte file");
     check_meta_group_length(bytes, h, path);
+    check_element_value(bytes, h, path);
     if (h.element == 0x0010 && h.length < 256) {
       syntax = bytes.value_at(h.value_at, h.length);
       has_syntax = true;
