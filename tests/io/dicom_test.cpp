@@ -609,6 +609,20 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
                         Catch::Contains("sop_class.dcm") && Catch::Contains(element) &&
                             Catch::Contains("not an image storage class"));
     }
+    // Any geometry or pixel element under a VR its dictionary entry does not allow (libFuzzer:
+    // FrameIncrementPointer (0028,0009), an assertion in gdcm::Attribute::SetFromDataElement).
+    const auto primary =
+        bytes.find(std::string("\x18\x00\x10\x15"
+                               "DS",
+                               6));
+    REQUIRE(primary != std::string::npos);
+    std::string primary_ul = bytes;
+    primary_ul[primary + 4] = 'U';
+    primary_ul[primary + 5] = 'L';
+    std::ofstream(tmp("primary_ul.dcm"), std::ios::binary) << primary_ul;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("primary_ul.dcm").string()),
+                      Catch::Contains("primary_ul.dcm") && Catch::Contains("(0018,1510)") &&
+                          Catch::Contains("VR UL where the DICOM dictionary says DS"));
     // Rows renamed NumberOfFrames (0028,0008), so an IS element with VR US (libFuzzer again:
     // an assertion in GDCM's Attribute<0028,0008>::SetFromDataElement).
     const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));

@@ -218,6 +218,18 @@ inline bool is_image_pixel_us(const DicomElementHeader& h) {
 /// (0008,0010) (it asserts the value starts "ACR-NEMA").
 inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
                                 const std::string& path) {
+  // GDCM reads the image's geometry and pixel description (groups 0018, 0020, 0028) through
+  // gdcm::Attribute, which asserts that an element's VR is compatible with its dictionary VR
+  // (libFuzzer: FrameIncrementPointer (0028,0009) under another VR). UN is left to GDCM.
+  if (h.vr != "implicit" && (h.group == 0x0018 || h.group == 0x0020 || h.group == 0x0028)) {
+    const gdcm::VR expected =
+        gdcm::Global::GetInstance().GetDicts().GetDictEntry(gdcm::Tag(h.group, h.element)).GetVR();
+    const gdcm::VR found = gdcm::VR::GetVRType(h.vr.c_str());
+    if (expected != gdcm::VR::INVALID && found != gdcm::VR::UN)
+      GIMM_CHECK_AS(FormatError, expected.Compatible(found),
+                    path << ": element " << h.tag() << " has VR " << h.vr
+                         << " where the DICOM dictionary says " << expected);
+  }
   if (is_image_pixel_us(h))
     GIMM_CHECK_AS(FormatError, (h.vr == "US" || h.vr == "implicit") && h.length == 2,
                   path << ": element " << h.tag() << " has VR " << h.vr << " and " << h.length
