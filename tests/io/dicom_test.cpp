@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cctype>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -623,6 +624,18 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("primary_ul.dcm").string()),
                       Catch::Contains("primary_ul.dcm") && Catch::Contains("(0018,1510)") &&
                           Catch::Contains("VR UL where the DICOM dictionary says DS"));
+    // Native pixel data 2 bytes short of the frame (libFuzzer + ASan: GDCM read past it).
+    const auto pixels = bytes.rfind(std::string("\xe0\x7f\x10\x00OW\x00\x00", 8));
+    REQUIRE(pixels != std::string::npos);
+    std::string short_pixels = bytes.substr(0, bytes.size() - 2);
+    std::uint32_t pixel_length = 0;
+    std::memcpy(&pixel_length, short_pixels.data() + pixels + 8, 4);
+    pixel_length -= 2;
+    std::memcpy(short_pixels.data() + pixels + 8, &pixel_length, 4);
+    std::ofstream(tmp("short_pixels.dcm"), std::ios::binary) << short_pixels;
+    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("short_pixels.dcm").string()),
+                      Catch::Contains("short_pixels.dcm") && Catch::Contains("(7FE0,0010)") &&
+                          Catch::Contains("holds " + std::to_string(pixel_length) + " bytes"));
     // Rows renamed NumberOfFrames (0028,0008), so an IS element with VR US (libFuzzer again:
     // an assertion in GDCM's Attribute<0028,0008>::SetFromDataElement).
     const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));

@@ -632,6 +632,16 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
            << (encapsulated
                    ? " at " + std::to_string(detail::kMaxDicomCompression) + ":1 compression"
                    : std::string()));
+  // Native pixels shorter than the header's frames: GDCM copies the full frame size out of the
+  // shorter value (libFuzzer, ASan: a heap read past the pixel data GDCM holds).
+  if (!encapsulated) {
+    const gdcm::ByteValue* stored = image.GetDataElement().GetByteValue();
+    const std::uint64_t stored_bytes = stored ? std::uint64_t(stored->GetLength()) : 0;
+    GIMM_CHECK(stored_bytes >= image.GetBufferLength(),
+               path << ": (7FE0,0010) PixelData holds " << stored_bytes << " bytes, but " << cols
+                    << " x " << rows << " x " << out.frames << " frames of " << bytes
+                    << "-byte pixels need " << image.GetBufferLength());
+  }
   std::vector<char> buffer(image.GetBufferLength());
   GIMM_CHECK(image.GetBuffer(buffer.data()),
              path << ": GDCM could not decode the pixels (transfer syntax "
