@@ -202,8 +202,8 @@ inline void check_meta_group_length(DicomBytes& bytes, const DicomElementHeader&
                      << " bytes and needs a data set after it");
 }
 
-/// The image pixel module's one-number attributes (PS3.3 C.7.6.3), which GDCM reads as US and
-/// asserts on when their VR or length is another: samples per pixel, planar configuration,
+/// The image pixel module's one-number attributes (PS3.3 C.7.6.3), which GDCM reads as one US
+/// and asserts on when their length is another: samples per pixel, planar configuration,
 /// rows, columns, bits allocated and stored, high bit, pixel representation.
 inline bool is_image_pixel_us(const DicomElementHeader& h) {
   if (h.group != 0x0028) return false;
@@ -230,9 +230,9 @@ inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
                     path << ": element " << h.tag() << " has VR " << h.vr
                          << " where the DICOM dictionary says " << expected);
   }
-  if (is_image_pixel_us(h))
-    GIMM_CHECK_AS(FormatError, (h.vr == "US" || h.vr == "implicit") && h.length == 2,
-                  path << ": element " << h.tag() << " has VR " << h.vr << " and " << h.length
+  if (is_image_pixel_us(h))  // the VR is checked above, against the dictionary
+    GIMM_CHECK_AS(FormatError, h.length == 2,
+                  path << ": element " << h.tag() << " has " << h.length
                        << " bytes; an image pixel attribute is one US (2 bytes)");
   // The SOP class, from the file meta group or the data set: GDCM picks its reading path by it
   // and asserts when a known class is not an image (libFuzzer: a presentation state's UID).
