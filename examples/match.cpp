@@ -122,15 +122,19 @@ std::optional<gimm::Camerad> read_camera(const std::string& path) {
   return gimm::camera_from_json(gimm::read_json_file(path), path);
 }
 
-/// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line;
-/// returns the number of matches.
-std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
+struct MatchedCounts {
+  std::size_t matches = 0;
+  std::size_t without_F = 0;  ///< pairs written with no gating F
+};
+
+/// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line.
+MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
                         const std::vector<std::string>& ids, bool use_cameras,
                         const std::filesystem::path& pred_dir,
                         const gimm::CameraError& camera_error,
                         const gimm::ImageDegradation& degradation, std::uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
-  std::size_t total = 0;
+  MatchedCounts counts;
   for (std::size_t n = 0; n < ids.size(); ++n) {
     const gimm::PairTruth truth = reader.pair(ids[n]);
     const std::string patient = gimm::split_pair_id(ids[n]).first;
@@ -164,30 +168,33 @@ std::size_t match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& r
     }
     const gimm::PairMatches matches = matcher.match(input);
     gimm::write_matches(gimm::matches_path(pred_dir, ids[n]), matches);
-    total += matches.size();
+    counts.matches += matches.size();
+    counts.without_F += !matches.F;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::fprintf(stderr, "\rgimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
                  ids.size(), seconds / double(n + 1),
                  seconds / double(n + 1) * double(ids.size() - n - 1));
   }
-  return total;
+  return counts;
 }
 
-/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json.
+/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json. `estimate_from`: the
+/// fewest matches the matcher estimates its gating F from (learned, --geometry matches, a
+/// gate), else 0.
 int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, const std::string& out,
-                  const gimm::CameraError& camera_error, const gimm::ImageDegradation& degradation,
-                  std::uint64_t seed) {
+                  const std::string& split, bool use_cameras, int estimate_from,
+                  const std::string& out, const gimm::CameraError& camera_error,
+                  const gimm::ImageDegradation& degradation, std::uint64_t seed) {
   gimm::DatasetReader reader(dataset);
   const auto ids = reader.pair_ids(split);
   GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
-  std::size_t total = 0;
+  MatchedCounts counts;
   // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
   // (a full disk) leaves `out` as it was.
   try {
     gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
-      total =
+      counts =
           match_pairs(matcher, reader, ids, use_cameras, staged, camera_error, degradation, seed);
     });
   } catch (...) {
@@ -195,7 +202,14 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
     throw;
   }
   std::fprintf(stderr, "\n");
-  std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), total, out.c_str());
+  std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), counts.matches,
+              out.c_str());
+  // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
+  // without F is written ungated.
+  if (estimate_from > 0 && counts.without_F > 0)
+    std::printf("gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
+                "matches, or a degenerate fit); those pairs are not gated\n",
+                counts.without_F, ids.size(), estimate_from);
   return 0;
 }
 
@@ -493,8 +507,11 @@ int main(int argc, char** argv) {
       GIMM_CHECK(degradation.none() || matcher->needs_images(),
                  "--noise-photons/--blur-px degrade the images, and --method "
                      << method << " does not look at them");
-      return match_dataset(*matcher, dataset, split, geometry == "cameras", out, camera_error,
-                           degradation, seed);
+      const bool estimates_F = method == "learned" && geometry == "matches" &&
+                               options.gate.mode != gimm::GateMode::none;
+      return match_dataset(*matcher, dataset, split, geometry == "cameras",
+                           estimates_F ? options.gate.min_matches : 0,
+                           out, camera_error, degradation, seed);
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
     for (const char* flag :

@@ -122,6 +122,20 @@ check(default != no_snap, "the recorded snap changed nothing")
 check(default == shipped_matches("gate_only", "--gate", "hard"),
       "--gate alone dropped the recorded delta or snap")
 
+# F estimated from the matches (the reference's gating) needs 32 of them; the shipped weights give
+# fewer on most pairs, which are then written ungated: said, with the count, not silent.
+est_out = os.path.join(TMP, "shipped_estimated")
+est = run("gimm-match", "--dataset", DS, "--weights", SHIPPED, "--geometry", "matches",
+          "--gate", "hard", "--out", est_out)
+ungated = sum(1 for m in shipped_matches("estimated_again", "--geometry", "matches",
+                                         "--gate", "hard").values() if "F" not in m)
+check(ungated > 0, "expected pairs with fewer than 32 matches on the one-patient dataset")
+check(f"no F for {ungated} of 27 pairs (fewer than 32 matches" in est.stdout,
+      f"--geometry matches: the ungated pairs were not reported:\n{est.stdout}")
+quiet = run("gimm-match", "--dataset", DS, "--weights", SHIPPED, "--geometry", "matches",
+            "--gate", "none", "--out", os.path.join(TMP, "shipped_estimated_none"))
+check("no F for" not in quiet.stdout, "--gate none estimates no F: nothing to report")
+
 # tools/train/record_gate.py writes the record gimm-match then follows; bad input changes nothing.
 RECORD = os.path.join(ROOT, "tools", "train", "record_gate.py")
 regated = os.path.join(TMP, "regated.safetensors")

@@ -98,4 +98,22 @@ assert bad.returncode != 0 and "no_film=False" in out and init_ckpt in out, out
 missing = train("bad_init", "--init", os.path.join(TMP, "nothing.pt"))
 out, _ = missing.communicate(timeout=600)
 assert missing.returncode != 0 and "nothing.pt does not exist" in out, out
-print("train_test: 2 ranks stop together; resume is exact; --init starts from its weights")
+
+# On-the-fly pairs (rendered_pairs.py through the gimm module): trains, validates on the dataset's
+# val split, and two runs with one seed give the same weights.
+try:
+    import gimm  # noqa: F401
+    rendered = True
+except ImportError:
+    rendered = False
+    print("train_test: the gimm module is not importable (PYTHONPATH): --rendered not tested")
+if rendered:
+    outs = [finish(train(f"rendered{n}", "--rendered", "2", "--steps", "3"), "--rendered run")
+            for n in range(2)]
+    assert "2 phantoms rendered on the fly" in outs[0] and "stopped at step 3" in outs[0], outs[0]
+    r0, _ = load_file(os.path.join(TMP, "rendered0", "last.safetensors"))
+    r1, _ = load_file(os.path.join(TMP, "rendered1", "last.safetensors"))
+    assert max(float(abs(r0[k] - r1[k]).max()) for k in r0) == 0.0, "--rendered not deterministic"
+    assert max(float(abs(r0[k] - a[k]).max()) for k in r0) > 0, "--rendered trained on the dataset"
+print("train_test: 2 ranks stop together; resume is exact; --init starts from its weights"
+      + ("; --rendered trains deterministically" if rendered else ""))

@@ -64,6 +64,11 @@ def parse_args(argv=None):
     p.add_argument("--val-minutes", type=float, default=15.0)
     p.add_argument("--val-pairs", type=int, default=150, help="validation pairs (0: all)")
     p.add_argument("--train-limit", type=int, default=0, help="use the first N train pairs")
+    p.add_argument("--rendered", type=int, default=0,
+                   help="train on N phantom patients rendered on the fly (rendered_pairs.py; "
+                        "phantom seeds from 1e9, disjoint from gimm-dataset's) with fresh views "
+                        "each visit, at the dataset's detector size; the dataset gives only the "
+                        "validation pairs. Needs the gimm module on PYTHONPATH")
     p.add_argument("--val-threshold", type=float, default=0.05, help="coarse threshold at val")
     return p.parse_args(argv)
 
@@ -140,6 +145,20 @@ def make_batch(samples, truths, gen, train=True):
     ca = torch.tensor([s.class_a for s in samples])
     cb = torch.tensor([s.class_b for s in samples])
     return a, b, ca, cb, [truths[id(s)] for s in samples]
+
+
+RENDERED_SEED_BASE = 10 ** 9  # gimm-dataset's phantoms: seed * 1000003 + index, far below
+
+
+def rendered_stream(args, rank, step):
+    """train.py's pairs rendered on the fly at the dataset's detector (its manifest)."""
+    from rendered_pairs import RenderedPairs  # needs the gimm module
+    with open(os.path.join(args.dataset, "manifest.json")) as f:
+        carm = json.load(f)["parameters"]["carm"]
+    seeds = [RENDERED_SEED_BASE + k for k in range(args.rendered)]
+    return iter(RenderedPairs(seeds, size=args.size, rows=carm["image_size"]["rows"],
+                              cols=carm["image_size"]["cols"], pixel_mm=carm["pixel_mm"],
+                              seed=[args.seed, rank, step]))
 
 
 def epoch_order(n, seed, epoch):
@@ -335,14 +354,19 @@ def main(argv=None):
             model.film.mlp[2].bias.mul_(0.1)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=args.weight_decay)
     t_load = time.time()
-    train = load_pairs(args.dataset, "train", args.size, args.train_limit or None, rank == 0)
+    # The stream restarts from (seed, rank, step) on --resume: deterministic, not a replay.
+    stream = rendered_stream(args, rank, state["step"] if state else 0) if args.rendered else None
+    train = [next(stream)] if stream else \
+        load_pairs(args.dataset, "train", args.size, args.train_limit or None, rank == 0)
     val = load_pairs(args.dataset, "val", args.size, args.val_pairs or None, rank == 0) \
         if rank == 0 else []
     hc, wc = (train[0].image_a.shape[0] + 7) // 8, (train[0].image_a.shape[1] + 7) // 8
     truths = {id(s): PairTruth(s.a, s.b, hc, wc) for s in train}
     if rank == 0:
         params = sum(p.numel() for p in model.parameters())
-        print(f"train: {len(train)} train pairs, {len(val)} val pairs at {args.size} px, loaded in "
+        source = f"{args.rendered} phantoms rendered on the fly" if stream else \
+            f"{len(train)} train pairs"
+        print(f"train: {source}, {len(val)} val pairs at {args.size} px, loaded in "
               f"{time.time() - t_load:.0f} s; {params} parameters; config {json.dumps(cfg)}",
               flush=True)
         with open(os.path.join(args.run, "config.json"), "w") as f:
@@ -390,12 +414,16 @@ def main(argv=None):
                        or (args.stop_at and step >= args.stop_at))
         if all_stop(out_of_time, world):
             break
-        if pos + per_step > len(order):
-            epoch, pos = epoch + 1, 0
-            order = epoch_order(len(train), args.seed, epoch)
-        idx = order[pos + rank:pos + per_step:world]
-        pos += per_step
-        batch = make_batch([train[i] for i in idx], truths, gen)
+        if stream:
+            samples = [next(stream) for _ in range(args.batch)]
+            truths = {id(s): PairTruth(s.a, s.b, hc, wc) for s in samples}
+        else:
+            if pos + per_step > len(order):
+                epoch, pos = epoch + 1, 0
+                order = epoch_order(len(train), args.seed, epoch)
+            samples = [train[i] for i in order[pos + rank:pos + per_step:world]]
+            pos += per_step
+        batch = make_batch(samples, truths, gen)
         for g in opt.param_groups:
             g["lr"] = lr_at(step, args)
         loss, terms = train_step(model, batch, args.max_fine)
