@@ -587,8 +587,6 @@ int main(int argc, char** argv) {
         matcher, a, b, class_a, class_b, loaded_pair.camera_a, loaded_pair.camera_b, options);
     const auto matched = std::chrono::steady_clock::now();
     result.matches.pair = pair;
-    result.matches.F = result.F;
-    result.matches.F_source = result.F ? result.fundamental_source : "";
     std::optional<gimm::Reconstruction> rec;
     if (!tree.empty() || !tree_vtk.empty())
       rec = gimm::reconstruct_matches(

@@ -191,8 +191,7 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
               py::gil_scoped_release release;
               r = match_pair(net, a, b, class_a, class_b, ca, cb, o);
             }
-            r.matches.F = r.F;
-            r.matches.F_source = r.F ? r.fundamental_source : "none";
+            if (!r.F) r.matches.F_source = "none";  // Python's dict says so explicitly
             py::dict d = matches_dict(std::move(r.matches));
             d.attr("pop")("pair");
             d["network_matches"] = r.network_matches;

@@ -7,7 +7,8 @@
 #
 # Rows per weights file (the learned matcher): gating none, soft, logit, hard with F estimated
 # from the matches (the reference's behaviour), hard with exact F from the cameras (2 px and
-# 10 px), and hard 10 px with the B point snapped onto its epipolar line. Then the
+# 10 px), and hard 4 px (the shipped weights' recorded gate) and 10 px with the B point snapped
+# onto its epipolar line. Then the
 # training-free rows: geometric (dataset masks; segmented from the images), epipolar-nearest,
 # oracle (sigma 1 and 2 px). Time per pair = wall time of gimm-match / pairs (PNG reading
 # included), one process on whatever else the machine runs: compare rows of one run only.
@@ -37,12 +38,15 @@ run() {  # name, then gimm-match flags
 printf 'method\tseconds_per_pair\n' > "$out/times.tsv"
 for spec in "$@"; do
   name=${spec%%=*} weights=${spec#*=}
-  run "$name-none" --weights "$weights" --gate none
-  run "$name-soft" --weights "$weights" --gate soft
-  run "$name-logit" --weights "$weights" --gate logit
-  run "$name-hard-estimated" --weights "$weights" --gate hard --geometry matches
-  run "$name-hard-exact" --weights "$weights" --gate hard
-  run "$name-hard10-exact" --weights "$weights" --gate hard --delta 10
+  # Every gate flag explicit: the weights record a default gate (the shipped ones: hard 4 px
+  # + snap) that would otherwise fill in what a row leaves out.
+  run "$name-none" --weights "$weights" --gate none --snap=false
+  run "$name-soft" --weights "$weights" --gate soft --snap=false
+  run "$name-logit" --weights "$weights" --gate logit --snap=false
+  run "$name-hard-estimated" --weights "$weights" --gate hard --delta 2 --snap=false --geometry matches
+  run "$name-hard-exact" --weights "$weights" --gate hard --delta 2 --snap=false
+  run "$name-hard4-exact-snap" --weights "$weights" --gate hard --delta 4 --snap
+  run "$name-hard10-exact" --weights "$weights" --gate hard --delta 10 --snap=false
   run "$name-hard10-exact-snap" --weights "$weights" --gate hard --delta 10 --snap
 done
 run geometric --method geometric

@@ -2,7 +2,9 @@
 # Calibration error sweep: the cameras given to the matchers are off (gimm-match
 # --camera-error-deg/-mm, geometry/camera_error.hpp; seed 0) while the images stay exact. Rows:
 # the geometric matcher (dataset masks), the learned matcher with exact-F hard gating (2 and
-# 10 px) and, for reference, with F estimated from its matches (needs no cameras). Writes
+# 10 px; 4 px + snap, the shipped weights' recorded gate) and, for reference, with F estimated
+# from its matches (needs no cameras; at coarse threshold 0.05, since the reference's estimate
+# needs 32 matches and the shipped threshold leaves about 16 per pair). Writes
 # OUT/sweep.tsv (one line per matcher and error: Prec@3px, 2D mean, coverage) and prints it.
 #
 #   tools/atlas/calibration_sweep.sh BUILD DATASET SPLIT OUT WEIGHTS
@@ -30,9 +32,13 @@ for error in "0 0" "0.5 0" "1 0" "2 0" "3 0" "0 2" "0 5" "0 10"; do
   label="${1}deg_${2}mm"
   flags=(--camera-error-deg "$1" --camera-error-mm "$2")
   match geometric "$label" --method geometric "${flags[@]}"
-  match learned-hard2-exact "$label" --weights "$weights" --gate hard "${flags[@]}"
-  match learned-hard10-exact "$label" --weights "$weights" --gate hard --delta 10 "${flags[@]}"
+  match learned-hard2-exact "$label" --weights "$weights" --gate hard --delta 2 --snap=false \
+    "${flags[@]}"
+  match learned-hard4-snap "$label" --weights "$weights" --gate hard --delta 4 --snap "${flags[@]}"
+  match learned-hard10-exact "$label" --weights "$weights" --gate hard --delta 10 --snap=false \
+    "${flags[@]}"
   echo "sweep: $label done" >&2
 done
-match learned-hard2-estimated any --weights "$weights" --gate hard --geometry matches
+match learned-t0.05-hard2-estimated any --weights "$weights" --threshold 0.05 --gate hard \
+  --delta 2 --snap=false --geometry matches
 column -t -s $'\t' "$out/sweep.tsv"

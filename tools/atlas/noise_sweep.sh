@@ -2,7 +2,7 @@
 # Where the image-reading matchers fail as the images degrade: dose (Poisson noise) and blur
 # applied to the rendered angiograms the matcher sees (gimm-match --noise-photons/--blur-px,
 # render/image_degradation.hpp), the truth untouched. Rows: clean, then each dose, then each
-# blur; columns: the learned matcher (exact F, hard 10 px + snap) and the geometric matcher
+# blur; columns: the learned matcher (exact F, hard 4 px + snap) and the geometric matcher
 # segmenting the images. The mask-based matchers (geometric with masks, epipolar-nearest,
 # oracle) do not read the images and are not affected. Deterministic (seed 0).
 #
@@ -20,7 +20,7 @@ for spec in "${settings[@]}"; do
   name=${spec%%:*} flags=${spec#*:}
   for method in gimm geometric-segmented; do
     case $method in
-      gimm) mflags=(--weights "$weights" --gate hard --delta 10 --snap) ;;
+      gimm) mflags=(--weights "$weights" --gate hard --delta 4 --snap) ;;
       geometric-segmented) mflags=(--method geometric --segment) ;;
     esac
     # shellcheck disable=SC2086  # $flags holds zero or two words

@@ -222,6 +222,9 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
             : raw.points_b[k];
     result.matches.add(raw.points_a[k], b, gated.confidence(Eigen::Index(k)));
   }
+  // The matches carry the F they were gated with (written with them, drawn by --picture).
+  result.matches.F = result.F;
+  result.matches.F_source = result.F ? result.fundamental_source : "";
   return result;
 }
 
