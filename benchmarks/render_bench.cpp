@@ -11,6 +11,7 @@
 #include "gimm/core/parallel.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/render/drr.hpp"
+#include "gimm/render/view_renderer.hpp"
 
 namespace {
 
@@ -147,6 +148,28 @@ BENCHMARK(BM_Trilinear_ImageCAS_512det)
     ->Arg(200)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+/// What gimm.Renderer(hu, label).render(camera) does from Python, in C++: the prepared view
+/// renderer (angiography recipe, 80 mm pads, voxel vessels) on the ImageCAS-size phantom, one
+/// view with its vessel mask and the Beer-Lambert intensity. benchmarks/python/drr_overhead.py
+/// times the same from Python and compares.
+void BM_ViewRenderer_ImageCAS_512det(benchmark::State& state) {
+  static const gimm::ViewRenderer renderer = [] {
+    gimm::PhantomOptions options;
+    options.seed = 1;
+    options.size = gimm::PhantomSize::imagecas;
+    const gimm::Phantom p = gimm::make_phantom(options);
+    return gimm::ViewRenderer(gimm::volume_cast<float>(p.hu), &p.label, gimm::RendererOptions{},
+                              "phantom");
+  }();
+  const auto camera = test_camera(30);
+  for (auto _ : state) {
+    gimm::RenderedView view = renderer.render(camera);
+    benchmark::DoNotOptimize(view.intensity());
+  }
+  state.counters["threads"] = gimm::max_threads();
+}
+BENCHMARK(BM_ViewRenderer_ImageCAS_512det)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 /// Single-thread kernels side by side on the same rays: Jacobs' traversal one ray at a time
 /// (here) and two interleaved (BM_SiddonPairKernel_1thread).

@@ -60,9 +60,11 @@ ContrastRecipe recipe_from(const py::handle& obj) {
   return r;
 }
 
-py::dict rendered_dict(RenderedView&& view, bool intensity) {
+/// `intensity`: Beer-Lambert of the view, computed by the caller with the GIL released (empty:
+/// not asked for).
+py::dict rendered_dict(RenderedView&& view, Image<float>&& intensity) {
   py::dict d;
-  if (intensity) d["intensity"] = adopt_image(view.intensity());
+  if (!intensity.empty()) d["intensity"] = adopt_image(std::move(intensity));
   d["line_integrals"] = adopt_image(std::move(view.line_integrals));
   if (!view.vessel_mask.empty()) d["vessel_mask"] = adopt_image(std::move(view.vessel_mask));
   if (!view.overlap.empty()) d["overlap"] = adopt_image(std::move(view.overlap));
@@ -171,11 +173,13 @@ several Python threads at once.)doc")
           [](const ViewRenderer& r, const py::handle& camera, bool intensity) {
             const Camerad c = camera_of(camera, "render: camera");
             RenderedView view;
+            Image<float> image;
             {
               py::gil_scoped_release release;
               view = r.render(c);
+              if (intensity) image = view.intensity();
             }
-            return rendered_dict(std::move(view), intensity);
+            return rendered_dict(std::move(view), std::move(image));
           },
           py::arg("camera"), py::arg("intensity") = true, R"doc(
 Renders one view of a Camera (or CArm). Returns a dict of (rows, cols) arrays, each a view of

@@ -115,6 +115,9 @@ Image<T> read_npy_image(const std::filesystem::path& path) {
                 "'" << what << "': expected a 2D shape (rows, cols), got "
                     << header.substr(open + 9, close - open - 8));
   const std::uint64_t rows = shape[0], cols = shape[1];
+  // A gimm image has pixels (and copying zero of them from a null buffer is undefined).
+  GIMM_CHECK_AS(FormatError, rows > 0 && cols > 0,
+                "'" << what << "': shape (" << rows << ", " << cols << ") has no pixels");
   constexpr std::uint64_t kMaxSide = std::numeric_limits<int>::max();
   GIMM_CHECK_AS(FormatError, rows <= kMaxSide && cols <= kMaxSide,
                 "'" << what << "': shape (" << rows << ", " << cols << ") exceeds " << kMaxSide
