@@ -337,5 +337,6 @@ void bind_geometry(py::module_& m);
 void bind_volumes(py::module_& m);  // files, the phantom, anatomy, the view protocol
 void bind_render(py::module_& m);   // the renderer, per-view and per-pair labels
 void bind_match(py::module_& m);    // the learned matcher, metrics
+void bind_dataset(py::module_& m);  // gimm-dataset folders
 
 }  // namespace gimm::python

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "common.hpp"
+#include "gimm/match/baselines.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/matches.hpp"
@@ -276,6 +277,46 @@ exact_vesselness: the slow reference kernels instead of the fast ones.
 Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the DP margin),
 world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras, F_source
 'cameras'). The GIL is released while matching.)doc");
+
+  m.def(
+      "match_baseline",
+      [](const py::handle& truth, const std::string& method, double sigma_px,
+         std::size_t max_points, std::uint64_t seed) {
+        const PairTruth t = truth_from(truth, 3.0, "truth");
+        if (method != "epipolar" && method != "oracle")
+          throw py::value_error("method must be 'epipolar' or 'oracle', got '" + method + "'");
+        if (!(std::isfinite(sigma_px) && sigma_px >= 0))
+          throw py::value_error("sigma_px must be finite and >= 0, got " +
+                                std::to_string(sigma_px));
+        if (max_points == 0) throw py::value_error("max_points must be > 0");
+        PairInput input;
+        input.id = t.id;
+        input.truth = &t;
+        PairMatches matches;
+        {
+          py::gil_scoped_release release;
+          if (method == "oracle") {
+            matches = OracleMatcher(sigma_px, seed).match(input);
+          } else {
+            EpipolarBaselineOptions o;
+            o.max_points = max_points;
+            matches = EpipolarMatcher(o, seed).match(input);
+          }
+        }
+        py::dict d = matches_dict(std::move(matches));
+        d.attr("pop")("pair");
+        return d;
+      },
+      py::arg("truth"), py::arg("method") = "epipolar", py::kw_only(), py::arg("sigma_px") = 1.0,
+      py::arg("max_points") = 300, py::arg("seed") = 0, R"doc(
+The training-free baselines of gimm-baseline on one pair (match/baselines.hpp).
+
+truth: a pair's truth dict (Dataset.pair(), label_pair(); masks are needed for 'epipolar'; its
+'id', e.g. 'phantom-0003/LCA_00-04', seeds the pair's random stream as gimm-baseline does).
+method: 'epipolar' (epipolar-nearest: for up to max_points vessel pixels of A, the vessel crossing
+of its epipolar line in B nearest in pixels, exact F from the truth) or 'oracle' (the true
+partners with sigma_px Gaussian noise per axis on the B side). Returns dict(points_a, points_b,
+confidence, F, F_source) as Matcher.match does.)doc");
 
   m.def(
       "evaluate",

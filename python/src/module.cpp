@@ -70,4 +70,5 @@ PYBIND11_MODULE(_gimm, m) {
   gimm::python::bind_volumes(m);
   gimm::python::bind_render(m);
   gimm::python::bind_match(m);
+  gimm::python::bind_dataset(m);
 }

@@ -1,0 +1,114 @@
+"""gimm.Dataset and gimm.match_baseline against the CLIs on the same gimm-dataset folder:
+the pairs read as gimm-eval reads them, the baselines equal to gimm-baseline's files, and the
+scores of evaluate() over the dataset equal to gimm-eval's."""
+import glob
+import json
+import os
+import unittest
+
+import numpy as np
+
+import gimm
+from common import cli, run, tmp_path
+
+
+def dataset():
+    """A one-patient dataset made by gimm-dataset (64 x 80 px views), or None."""
+    exe = cli("gimm-dataset")
+    if exe is None:
+        return None
+    root = tmp_path("dataset", "ds", "x")[:-2]
+    if not os.path.exists(os.path.join(root, "manifest.json")):
+        run(exe, "--phantom", 1, "--rows", 64, "--cols", 80, "--pixel", 3.0, "--seed", 5,
+            "--out", root, "--quiet")
+    return root
+
+
+class DatasetTest(unittest.TestCase):
+    def setUp(self):
+        self.root = dataset()
+        if self.root is None:
+            self.skipTest("gimm-dataset not built")
+        self.ds = gimm.Dataset(self.root)
+
+    def test_pairs_as_written(self):
+        ids = self.ds.pair_ids()
+        self.assertEqual(len(ids), 27)  # LCA 7 views, RCA 4
+        self.assertEqual(self.ds.patients(), ["phantom-0000"])
+        self.assertEqual(sorted(ids), sorted(self.ds.pair_ids("train") + self.ds.pair_ids("val")
+                                             + self.ds.pair_ids("test")))
+        pair = self.ds.pair(ids[0])
+        patient, name = ids[0].split("/")
+        with open(os.path.join(self.root, "patients", patient, "pairs", name + ".json")) as f:
+            written = json.load(f)
+        fields = written["dense_fields"]
+        dense = np.asarray(written["dense"], float).reshape(-1, len(fields))
+        col = lambda key: dense[:, fields.index(key)]  # noqa: E731
+        np.testing.assert_array_equal(pair["points_a"], np.stack([col("u_a"), col("v_a")], 1))
+        np.testing.assert_array_equal(pair["points_b"], np.stack([col("u_b"), col("v_b")], 1))
+        np.testing.assert_array_equal(pair["world_mm"],
+                                      np.stack([col("x_mm"), col("y_mm"), col("z_mm")], 1))
+        np.testing.assert_array_equal(pair["F"], np.asarray(written["F"]))
+        self.assertEqual((pair["view_a"], pair["view_b"]), (written["view_a"], written["view_b"]))
+        self.assertEqual(pair["view_class_a"], written["view_class_a"])
+        self.assertEqual(pair["system"], name[:3])
+        self.assertEqual(pair["mask_a"].shape, (64, 80))
+        self.assertEqual(pair["mask_a"].dtype, np.uint8)
+        self.assertTrue(pair["mask_a"].any())
+        # The camera and the image of view A, as gimm-match reads them.
+        camera = self.ds.camera(patient, pair["view_a"])
+        self.assertEqual(camera.shape, (64, 80))
+        uv, _ = camera.project(pair["world_mm"])
+        np.testing.assert_allclose(uv, pair["points_a"], atol=1e-6)
+        image = self.ds.image(patient, pair["view_a"])
+        np.testing.assert_array_equal(
+            image, gimm.read_png(os.path.join(self.root, "patients", patient, "views",
+                                              pair["view_a"] + ".png")))
+        self.assertEqual(self.ds.manifest["format"], "gimm-dataset/1")
+
+    def test_baselines_equal_gimm_baseline_and_scores_equal_gimm_eval(self):
+        baseline, evaluate = cli("gimm-baseline"), cli("gimm-eval")
+        if baseline is None or evaluate is None:
+            self.skipTest("gimm-baseline / gimm-eval not built")
+        for method, flags, kwargs in (("epipolar", ["--max-points", 50], {"max_points": 50}),
+                                      ("oracle", ["--sigma", 1.5], {"sigma_px": 1.5})):
+            pred = tmp_path("dataset", "pred-" + method, "x")[:-2]
+            run(baseline, "--dataset", self.root, "--method", method, "--seed", 4, "--out", pred,
+                *flags)
+            truths, mine = [], []
+            for pair_id in self.ds.pair_ids():
+                truth = self.ds.pair(pair_id)
+                ours = gimm.match_baseline(truth, method, seed=4, **kwargs)
+                theirs = gimm.read_matches(os.path.join(pred, pair_id + ".json"))
+                for key in ("points_a", "points_b", "confidence"):
+                    np.testing.assert_array_equal(ours[key], theirs[key], err_msg=pair_id)
+                truths.append(truth)
+                mine.append(ours)
+            out = tmp_path("dataset", "eval-" + method, "x")[:-2]
+            run(evaluate, "--dataset", self.root, "--predictions", pred, "--out", out)
+            with open(os.path.join(out, "summary.json")) as f:
+                reference = json.load(f)["pooled"]
+            pooled = gimm.evaluate(truths, mine)["pooled"]
+            for key, value in reference.items():
+                if value is None:
+                    self.assertIsNone(pooled[key], key)
+                else:
+                    self.assertAlmostEqual(pooled[key], value, places=12, msg=(method, key))
+        self.assertGreater(len(glob.glob(os.path.join(pred, "*", "*.json"))), 0)
+
+    def test_bad_input_is_named(self):
+        with self.assertRaisesRegex(gimm.Error, "nowhere"):
+            gimm.Dataset(tmp_path("dataset", "nowhere"))
+        with self.assertRaisesRegex(gimm.IoError, "phantom-0000/pairs/LCA_99-98.json"):
+            self.ds.pair("phantom-0000/LCA_99-98")
+        truth = self.ds.pair(self.ds.pair_ids()[0])
+        with self.assertRaisesRegex(ValueError, "method must be 'epipolar' or 'oracle', got 'x'"):
+            gimm.match_baseline(truth, "x")
+        with self.assertRaisesRegex(ValueError, "sigma_px must be finite"):
+            gimm.match_baseline(truth, "oracle", sigma_px=float("nan"))
+        with self.assertRaisesRegex(ValueError, "max_points must be > 0"):
+            gimm.match_baseline(truth, max_points=0)
+
+
+if __name__ == "__main__":
+    unittest.main()
