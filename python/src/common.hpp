@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "gimm/core/image.hpp"
+#include "gimm/dataset/reader.hpp"
 #include "gimm/core/volume.hpp"
 #include "gimm/geometry/camera.hpp"
 
@@ -326,6 +327,27 @@ inline ProjectionModel parse_model(const std::string& name) {
   if (name == "perspective") return ProjectionModel::perspective;
   if (name == "orthographic") return ProjectionModel::orthographic;
   throw py::value_error("model must be 'perspective' or 'orthographic', got '" + name + "'");
+}
+
+/// A pair's truth (dataset/reader.hpp) as the dict evaluate() takes: id, points_a, points_b
+/// (N, 2), world_mm (N, 3), F or None (unknown: all zero), mask_a, mask_b (own copies).
+inline py::dict truth_dict(const PairTruth& t) {
+  std::vector<Eigen::Vector2d> a, b;
+  std::vector<Eigen::Vector3d> world;
+  for (const Correspondence& c : t.dense) {
+    a.push_back(c.a);
+    b.push_back(c.b);
+    world.push_back(c.world);
+  }
+  py::dict d;
+  d["id"] = t.id;
+  d["points_a"] = rows_to_numpy<2>(a);
+  d["points_b"] = rows_to_numpy<2>(b);
+  d["world_mm"] = rows_to_numpy<3>(world);
+  d["F"] = t.F.isZero() ? py::object(py::none()) : py::object(to_numpy(t.F));
+  d["mask_a"] = adopt_image(Image<std::uint8_t>(*t.mask_a));
+  d["mask_b"] = adopt_image(Image<std::uint8_t>(*t.mask_b));
+  return d;
 }
 
 /// A Camera, or a CArm's camera (a CArm given where a camera is expected).

@@ -12,36 +12,6 @@
 
 namespace gimm::python {
 
-namespace {
-
-/// A pair's labels and masks as the truth dict of evaluate() / label_pair().
-py::dict pair_truth_dict(PairTruth&& t) {
-  std::vector<Eigen::Vector2d> a, b;
-  std::vector<Eigen::Vector3d> world;
-  for (const Correspondence& c : t.dense) {
-    a.push_back(c.a);
-    b.push_back(c.b);
-    world.push_back(c.world);
-  }
-  py::dict d;
-  d["id"] = t.id;
-  d["system"] = t.system();
-  d["view_a"] = t.view_a;
-  d["view_b"] = t.view_b;
-  d["view_class_a"] = t.view_class_a;
-  d["view_class_b"] = t.view_class_b;
-  d["F"] = to_numpy(t.F);
-  d["points_a"] = rows_to_numpy<2>(a);
-  d["points_b"] = rows_to_numpy<2>(b);
-  d["world_mm"] = rows_to_numpy<3>(world);
-  // The reader shares its masks; the arrays get their own copies (they are writable).
-  d["mask_a"] = adopt_image(Image<std::uint8_t>(*t.mask_a));
-  d["mask_b"] = adopt_image(Image<std::uint8_t>(*t.mask_b));
-  return d;
-}
-
-}  // namespace
-
 void bind_dataset(py::module_& m) {
   py::class_<DatasetReader>(m, "Dataset", R"doc(
 A gimm-dataset folder (docs/dataset.md), read as gimm-match and gimm-eval read it.
@@ -69,7 +39,13 @@ reads it). manifest: the manifest as a dict.)doc")
               py::gil_scoped_release release;
               t = r.pair(id);
             }
-            return pair_truth_dict(std::move(t));
+            py::dict d = truth_dict(t);
+            d["system"] = t.system();
+            d["view_a"] = t.view_a;
+            d["view_b"] = t.view_b;
+            d["view_class_a"] = t.view_class_a;
+            d["view_class_b"] = t.view_class_b;
+            return d;
           },
           py::arg("id"))
       .def("camera", &DatasetReader::camera, py::arg("patient"), py::arg("view"))

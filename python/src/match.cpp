@@ -372,23 +372,7 @@ coverage, epipolar_*); undefined figures are None.)doc");
   m.def(
       "read_user_truth",
       [](const std::filesystem::path& path, double radius_px) {
-        const PairTruth t = read_user_truth(path, radius_px);
-        std::vector<Eigen::Vector2d> a, b;
-        std::vector<Eigen::Vector3d> w;
-        for (const auto& c : t.dense) {
-          a.push_back(c.a);
-          b.push_back(c.b);
-          w.push_back(c.world);
-        }
-        py::dict d;
-        d["id"] = t.id;
-        d["points_a"] = rows_to_numpy<2>(a);
-        d["points_b"] = rows_to_numpy<2>(b);
-        d["world_mm"] = rows_to_numpy<3>(w);
-        d["F"] = t.F.isZero() ? py::object(py::none()) : py::object(to_numpy(t.F));
-        d["mask_a"] = adopt_image(Image<std::uint8_t>(*t.mask_a));
-        d["mask_b"] = adopt_image(Image<std::uint8_t>(*t.mask_b));
-        return d;
+        return truth_dict(read_user_truth(path, radius_px));
       },
       py::arg("path"), py::arg("radius_px") = 3.0,
       "Reads a gimm-truth/1 file (docs/evaluation.md) as a truth dict for evaluate: points_a, "
