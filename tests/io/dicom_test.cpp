@@ -29,6 +29,17 @@ fs::path tmp(const std::string& name) {
   return fs::path(GIMM_TEST_TMP) / "dicom" / name;
 }
 
+/// Writes `bytes` to tmp(name) and returns read_xa_dicom's error on it ("" if it reads).
+std::string refusal(const std::string& name, const std::string& bytes) {
+  std::ofstream(tmp(name), std::ios::binary) << bytes;
+  try {
+    gimm::read_xa_dicom(tmp(name).string());
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
 /// What a test file holds. Pixel (r, c) of frame f is value(f, r, c).
 struct Spec {
   int rows = 6, cols = 8, frames = 1, bits = 16;
@@ -428,34 +439,29 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     const auto sop = bytes.find(std::string("\x02\x00\x03\x00UI", 6));  // (0002,0003)
     REQUIRE(sop != std::string::npos);
     // Cut inside (0002,0003): the group length (0002,0000) promises more than the file holds.
-    std::ofstream(tmp("cut_meta.dcm"), std::ios::binary) << bytes.substr(0, sop + 13);
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("cut_meta.dcm").string()),
-                      Catch::Contains("cut_meta.dcm") && Catch::Contains("(0002,0000)") &&
-                          Catch::Contains("207 bytes"));
+    CHECK_THAT(refusal("cut_meta.dcm", bytes.substr(0, sop + 13)),
+               Catch::Contains("cut_meta.dcm") && Catch::Contains("(0002,0000)") &&
+                   Catch::Contains("207 bytes"));
     // Without the group length (an optional element: 12 bytes right after "DICM"), the same cut
     // is found at the element, and a file of only a meta group at its end.
     REQUIRE(bytes.compare(132, 6, std::string("\x02\x00\x00\x00UL", 6)) == 0);
     const std::string no_length = bytes.substr(0, 132) + bytes.substr(144);
-    std::ofstream(tmp("cut_element.dcm"), std::ios::binary) << no_length.substr(0, sop - 12 + 13);
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("cut_element.dcm").string()),
-                      Catch::Contains("cut_element.dcm") && Catch::Contains("(0002,0003)") &&
-                          Catch::Contains("past the end"));
+    CHECK_THAT(refusal("cut_element.dcm", no_length.substr(0, sop - 12 + 13)),
+               Catch::Contains("cut_element.dcm") && Catch::Contains("(0002,0003)") &&
+                   Catch::Contains("past the end"));
     std::size_t data_set = sop - 12;  // the first (0008,xxxx) element with a VR
     while (data_set + 6 < no_length.size() &&
            !(no_length.compare(data_set, 2, std::string("\x08\x00", 2)) == 0 &&
              std::isupper(static_cast<unsigned char>(no_length[data_set + 4])) &&
              std::isupper(static_cast<unsigned char>(no_length[data_set + 5]))))
       ++data_set;
-    std::ofstream(tmp("meta_only.dcm"), std::ios::binary) << no_length.substr(0, data_set);
-    CHECK_THROWS_WITH(
-        gimm::read_xa_dicom(tmp("meta_only.dcm").string()),
-        Catch::Contains("meta_only.dcm") && Catch::Contains("ends inside the file meta"));
+    CHECK_THAT(refusal("meta_only.dcm", no_length.substr(0, data_set)),
+               Catch::Contains("meta_only.dcm") && Catch::Contains("ends inside the file meta"));
     std::string bad_vr = bytes;
     bad_vr[sop + 4] = 'E';  // "EI": two letters, not a VR
-    std::ofstream(tmp("bad_vr.dcm"), std::ios::binary) << bad_vr;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("bad_vr.dcm").string()),
-                      Catch::Contains("bad_vr.dcm") && Catch::Contains("(0002,0003)") &&
-                          Catch::Contains("VR 'EI', which is not a DICOM VR"));
+    CHECK_THAT(refusal("bad_vr.dcm", bad_vr),
+               Catch::Contains("bad_vr.dcm") && Catch::Contains("(0002,0003)") &&
+                   Catch::Contains("VR 'EI', which is not a DICOM VR"));
     // The data set: (0018,1510) PositionerPrimaryAngle claims 0x3a08 bytes.
     const auto angle =
         bytes.find(std::string("\x18\x00\x10\x15"
@@ -465,72 +471,63 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     std::string long_angle = bytes;
     long_angle[angle + 6] = 0x08;
     long_angle[angle + 7] = 0x3a;
-    std::ofstream(tmp("long_angle.dcm"), std::ios::binary) << long_angle;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("long_angle.dcm").string()),
-                      Catch::Contains("long_angle.dcm") && Catch::Contains("(0018,1510)") &&
-                          Catch::Contains("14856 bytes, past the end"));
+    CHECK_THAT(refusal("long_angle.dcm", long_angle),
+               Catch::Contains("long_angle.dcm") && Catch::Contains("(0018,1510)") &&
+                   Catch::Contains("14856 bytes, past the end"));
     // The same element with VR bytes that are not letters: GDCM reads it as implicit VR (a
     // 4-byte length, here 0x9B000000) and allocated 2.6 GB for it before gimm refused it first
     // (found by libFuzzer: docs/dev/fuzzing.md).
     std::string implicit_angle = bytes;
     implicit_angle.replace(angle + 4, 4, std::string("\x00\x00\x00\x9B", 4));
-    std::ofstream(tmp("implicit_angle.dcm"), std::ios::binary) << implicit_angle;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("implicit_angle.dcm").string()),
-                      Catch::Contains("implicit_angle.dcm") && Catch::Contains("(0018,1510)") &&
-                          Catch::Contains("no VR in an explicit VR data set"));
+    CHECK_THAT(refusal("implicit_angle.dcm", implicit_angle),
+               Catch::Contains("implicit_angle.dcm") && Catch::Contains("(0018,1510)") &&
+                   Catch::Contains("no VR in an explicit VR data set"));
     // (0008,0016) SOPClassUID renamed (0008,0010), the retired RecognitionCode: GDCM asserts that
     // its value starts "ACR-NEMA" (found by libFuzzer).
     const auto sop_class = bytes.find(std::string("\x08\x00\x16\x00UI", 6));
     REQUIRE(sop_class != std::string::npos);
     std::string recognition = bytes;
     recognition[sop_class + 2] = 0x10;
-    std::ofstream(tmp("recognition.dcm"), std::ios::binary) << recognition;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("recognition.dcm").string()),
-                      Catch::Contains("recognition.dcm") && Catch::Contains("(0008,0010)") &&
-                          Catch::Contains("not 'ACR-NEMA"));
+    CHECK_THAT(refusal("recognition.dcm", recognition), Catch::Contains("recognition.dcm") &&
+                                                            Catch::Contains("(0008,0010)") &&
+                                                            Catch::Contains("not 'ACR-NEMA"));
     // (0008,0030) StudyTime renamed (0008,0010): out of order, which sends GDCM guessing the
     // byte order (libFuzzer found a 4 GB allocation that way).
     const auto study_time = bytes.find(std::string("\x08\x00\x30\x00TM", 6));
     REQUIRE(study_time != std::string::npos);
     std::string unordered = bytes;
     unordered[study_time + 2] = 0x10;
-    std::ofstream(tmp("unordered.dcm"), std::ios::binary) << unordered;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("unordered.dcm").string()),
-                      Catch::Contains("unordered.dcm") && Catch::Contains("(0008,0010)") &&
-                          Catch::Contains("must ascend by tag"));
+    CHECK_THAT(refusal("unordered.dcm", unordered), Catch::Contains("unordered.dcm") &&
+                                                        Catch::Contains("(0008,0010)") &&
+                                                        Catch::Contains("must ascend by tag"));
     // "DICM" followed by something else than the file meta group; a meta group without the
     // transfer syntax (0002,0010) (renamed (0002,0011), still in order).
     std::string shifted = std::string(1, '\0') + bytes;  // "DICM" at byte 129
-    std::ofstream(tmp("shifted.dcm"), std::ios::binary) << shifted;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("shifted.dcm").string()),
-                      Catch::Contains("shifted.dcm") && Catch::Contains("no \"DICM\" prefix"));
+    CHECK_THAT(refusal("shifted.dcm", shifted),
+               Catch::Contains("shifted.dcm") && Catch::Contains("no \"DICM\" prefix"));
     std::string no_meta = bytes;
     no_meta[132] = 0x08;
-    std::ofstream(tmp("no_meta.dcm"), std::ios::binary) << no_meta;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("no_meta.dcm").string()),
-                      Catch::Contains("no_meta.dcm") && Catch::Contains("no file meta group"));
+    CHECK_THAT(refusal("no_meta.dcm", no_meta),
+               Catch::Contains("no_meta.dcm") && Catch::Contains("no file meta group"));
     std::string implicit_meta = bytes;  // (0002,0003)'s VR "UI" -> two NULs
     implicit_meta[sop + 4] = implicit_meta[sop + 5] = '\0';
-    std::ofstream(tmp("implicit_meta.dcm"), std::ios::binary) << implicit_meta;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("implicit_meta.dcm").string()),
-                      Catch::Contains("implicit_meta.dcm") && Catch::Contains("(0002,0003)") &&
-                          Catch::Contains("must be explicit VR"));
+    CHECK_THAT(refusal("implicit_meta.dcm", implicit_meta),
+               Catch::Contains("implicit_meta.dcm") && Catch::Contains("(0002,0003)") &&
+                   Catch::Contains("must be explicit VR"));
     std::string undefined_meta = bytes;  // (0002,0003) UI -> OB of undefined length
     undefined_meta.replace(sop + 4, 8, std::string("OB\0\0\xff\xff\xff\xff", 8));
-    std::ofstream(tmp("undefined_meta.dcm"), std::ios::binary) << undefined_meta;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("undefined_meta.dcm").string()),
-                      Catch::Contains("undefined_meta.dcm") && Catch::Contains("(0002,0003)") &&
-                          Catch::Contains("undefined length"));
+    CHECK_THAT(refusal("undefined_meta.dcm", undefined_meta),
+               Catch::Contains("undefined_meta.dcm") && Catch::Contains("(0002,0003)") &&
+                   Catch::Contains("undefined length"));
     // Rows 6 -> 6000: the header asks for 96,000 bytes of pixels that a 1 KB file cannot hold;
     // refused before the buffer is allocated.
     const auto rows_at = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00\x06\x00", 10));
     REQUIRE(rows_at != std::string::npos);
     std::string tall = bytes;
     tall.replace(rows_at + 8, 2, std::string("\x70\x17", 2));
-    std::ofstream(tmp("tall.dcm"), std::ios::binary) << tall;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("tall.dcm").string()),
-                      Catch::Contains("tall.dcm") && Catch::Contains("8 x 6000 x 1 frames") &&
-                          Catch::Contains("96000 bytes, more than the"));
+    CHECK_THAT(refusal("tall.dcm", tall), Catch::Contains("tall.dcm") &&
+                                              Catch::Contains("8 x 6000 x 1 frames") &&
+                                              Catch::Contains("96000 bytes, more than the"));
     // A sequence of undefined length, (0008,1140) ReferencedImageSequence, with one item of
     // undefined length, put where its tag belongs: read as it is, and refused where an element
     // inside the item runs past the end, or the sequence is not closed.
@@ -566,35 +563,30 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
       const auto explicit_le = other.find("1.2.840.10008.1.2.1");
       REQUIRE(explicit_le != std::string::npos);
       other.replace(explicit_le, uid.size(), uid + std::string(19 - uid.size(), '\0'));
-      std::ofstream(tmp("syntax.dcm"), std::ios::binary) << other;
-      CHECK_THROWS_WITH(
-          gimm::read_xa_dicom(tmp("syntax.dcm").string()),
-          Catch::Contains("syntax.dcm") && Catch::Contains(uid) && Catch::Contains(message));
+      CHECK_THAT(refusal("syntax.dcm", other),
+                 Catch::Contains("syntax.dcm") && Catch::Contains(uid) && Catch::Contains(message));
     }
     const auto syntax_uid = bytes.find(std::string("\x02\x00\x10\x00UI", 6));
     REQUIRE(syntax_uid != std::string::npos);
     std::string no_syntax = bytes;
     no_syntax[syntax_uid + 2] = 0x11;
-    std::ofstream(tmp("no_syntax.dcm"), std::ios::binary) << no_syntax;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("no_syntax.dcm").string()),
-                      Catch::Contains("no_syntax.dcm") && Catch::Contains("(0002,0010)"));
+    CHECK_THAT(refusal("no_syntax.dcm", no_syntax),
+               Catch::Contains("no_syntax.dcm") && Catch::Contains("(0002,0010)"));
     const auto spp = bytes.find(std::string("\x28\x00\x02\x00US\x02\x00", 8));
     REQUIRE(spp != std::string::npos);
     std::string many_samples = bytes;
     many_samples[spp + 8] = 9;
-    std::ofstream(tmp("samples.dcm"), std::ios::binary) << many_samples;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("samples.dcm").string()),
-                      Catch::Contains("(0028,0002)") && Catch::Contains("is 9"));
+    CHECK_THAT(refusal("samples.dcm", many_samples),
+               Catch::Contains("(0028,0002)") && Catch::Contains("is 9"));
     // Columns (0028,0011) as UL, and Rows (0028,0010) as a 4-byte US (found by libFuzzer: an
     // assertion in GDCM's ImageHelper::GetDimensionsValue).
     const auto columns = bytes.find(std::string("\x28\x00\x11\x00US\x02\x00", 8));
     REQUIRE(columns != std::string::npos);
     std::string columns_ul = bytes;
     columns_ul[columns + 5] = 'L';
-    std::ofstream(tmp("columns_ul.dcm"), std::ios::binary) << columns_ul;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("columns_ul.dcm").string()),
-                      Catch::Contains("columns_ul.dcm") && Catch::Contains("(0028,0011)") &&
-                          Catch::Contains("VR UL"));
+    CHECK_THAT(refusal("columns_ul.dcm", columns_ul), Catch::Contains("columns_ul.dcm") &&
+                                                          Catch::Contains("(0028,0011)") &&
+                                                          Catch::Contains("VR UL"));
     // A presentation state's SOP class (known to GDCM, not an image) in the file meta group,
     // an unknown one in the data set (libFuzzer: an assertion in PixmapReader::Read).
     for (const auto& [tag, element] :
@@ -605,10 +597,9 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
       std::string other = bytes;  // ...1.12.1 (XA) -> ...1.11.1 (GSPS)
       REQUIRE(other.compare(sop_class + 8, 28, "1.2.840.10008.5.1.4.1.1.12.1") == 0);
       other[sop_class + 8 + 25] = '1';
-      std::ofstream(tmp("sop_class.dcm"), std::ios::binary) << other;
-      CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("sop_class.dcm").string()),
-                        Catch::Contains("sop_class.dcm") && Catch::Contains(element) &&
-                            Catch::Contains("not an image storage class"));
+      CHECK_THAT(refusal("sop_class.dcm", other),
+                 Catch::Contains("sop_class.dcm") && Catch::Contains(element) &&
+                     Catch::Contains("not an image storage class"));
     }
     // Any geometry or pixel element under a VR its dictionary entry does not allow (libFuzzer:
     // FrameIncrementPointer (0028,0009), an assertion in gdcm::Attribute::SetFromDataElement).
@@ -620,10 +611,9 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     std::string primary_ul = bytes;
     primary_ul[primary + 4] = 'U';
     primary_ul[primary + 5] = 'L';
-    std::ofstream(tmp("primary_ul.dcm"), std::ios::binary) << primary_ul;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("primary_ul.dcm").string()),
-                      Catch::Contains("primary_ul.dcm") && Catch::Contains("(0018,1510)") &&
-                          Catch::Contains("VR UL where the DICOM dictionary says DS"));
+    CHECK_THAT(refusal("primary_ul.dcm", primary_ul),
+               Catch::Contains("primary_ul.dcm") && Catch::Contains("(0018,1510)") &&
+                   Catch::Contains("VR UL where the DICOM dictionary says DS"));
     // Native pixel data 2 bytes short of the frame (libFuzzer + ASan: GDCM read past it).
     const auto pixels = bytes.rfind(std::string("\xe0\x7f\x10\x00OW\x00\x00", 8));
     REQUIRE(pixels != std::string::npos);
@@ -632,29 +622,25 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
     std::memcpy(&pixel_length, short_pixels.data() + pixels + 8, 4);
     pixel_length -= 2;
     std::memcpy(short_pixels.data() + pixels + 8, &pixel_length, 4);
-    std::ofstream(tmp("short_pixels.dcm"), std::ios::binary) << short_pixels;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("short_pixels.dcm").string()),
-                      Catch::Contains("short_pixels.dcm") && Catch::Contains("(7FE0,0010)") &&
-                          Catch::Contains("holds " + std::to_string(pixel_length) + " bytes"));
+    CHECK_THAT(refusal("short_pixels.dcm", short_pixels),
+               Catch::Contains("short_pixels.dcm") && Catch::Contains("(7FE0,0010)") &&
+                   Catch::Contains("holds " + std::to_string(pixel_length) + " bytes"));
     // Rows renamed NumberOfFrames (0028,0008), so an IS element with VR US (libFuzzer again:
     // an assertion in GDCM's Attribute<0028,0008>::SetFromDataElement).
     const auto rows = bytes.find(std::string("\x28\x00\x10\x00US\x02\x00", 8));
     REQUIRE(rows != std::string::npos);
     std::string frames_us = bytes;
     frames_us[rows + 2] = 0x08;
-    std::ofstream(tmp("frames_us.dcm"), std::ios::binary) << frames_us;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("frames_us.dcm").string()),
-                      Catch::Contains("(0028,0008)") && Catch::Contains("VR US"));
+    CHECK_THAT(refusal("frames_us.dcm", frames_us),
+               Catch::Contains("(0028,0008)") && Catch::Contains("VR US"));
     REQUIRE(rows != std::string::npos);
     std::string rows_long = bytes;  // 4 bytes: the value and the next element's first two
     rows_long[rows + 6] = 4;
-    std::ofstream(tmp("rows_long.dcm"), std::ios::binary) << rows_long;
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("rows_long.dcm").string()),
-                      Catch::Contains("(0028,0010)") && Catch::Contains("4 bytes"));
-    std::ofstream(tmp("tail.dcm"), std::ios::binary) << bytes << "tail";
-    CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("tail.dcm").string()),
-                      Catch::Contains("tail.dcm") && Catch::Contains("4 bytes after element") &&
-                          Catch::Contains("(7FE0,0010)"));
+    CHECK_THAT(refusal("rows_long.dcm", rows_long),
+               Catch::Contains("(0028,0010)") && Catch::Contains("4 bytes"));
+    CHECK_THAT(refusal("tail.dcm", bytes + "tail"), Catch::Contains("tail.dcm") &&
+                                                        Catch::Contains("4 bytes after element") &&
+                                                        Catch::Contains("(7FE0,0010)"));
   }
 
   // A compressed syntax this build cannot decode: JPEG-LS pixels under the JPIP-referenced
@@ -668,9 +654,8 @@ TEST_CASE("DICOM: bad files fail naming the file and the tag", "[io][dicom]") {
   const auto at = bytes.find(from);
   REQUIRE(at != std::string::npos);
   bytes.replace(at, from.size(), to);
-  std::ofstream(tmp("jpip.dcm"), std::ios::binary) << bytes;
-  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("jpip.dcm").string()),
-                    Catch::Contains("jpip.dcm") && Catch::Contains("transfer syntax"));
+  CHECK_THAT(refusal("jpip.dcm", bytes),
+             Catch::Contains("jpip.dcm") && Catch::Contains("transfer syntax"));
 }
 
 TEST_CASE("View class from C-arm angles", "[labels][dicom]") {
