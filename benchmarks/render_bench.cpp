@@ -107,12 +107,19 @@ BENCHMARK(BM_Trilinear_256cube_512det)
 
 /// The ImageCAS-size phantom (seed 1, 512 x 512 x 256 at 0.4 x 0.4 x 0.5 mm, default noise) as
 /// attenuation (mm^-1): angiography recipe with the whole coronary label injected. Built once.
-const gimm::Volume<float>& phantom_volume() {
-  static const gimm::Volume<float> volume = [] {
+const gimm::Phantom& imagecas_phantom() {
+  static const gimm::Phantom phantom = [] {
     gimm::PhantomOptions options;
     options.seed = 1;
     options.size = gimm::PhantomSize::imagecas;
-    const gimm::Phantom p = gimm::make_phantom(options);
+    return gimm::make_phantom(options);
+  }();
+  return phantom;
+}
+
+const gimm::Volume<float>& phantom_volume() {
+  static const gimm::Volume<float> volume = [] {
+    const gimm::Phantom& p = imagecas_phantom();
     return gimm::make_attenuation(gimm::volume_cast<float>(p.hu), &p.label, gimm::ContrastRecipe{},
                                   "phantom");
   }();
@@ -154,14 +161,9 @@ BENCHMARK(BM_Trilinear_ImageCAS_512det)
 /// view with its vessel mask and the Beer-Lambert intensity. benchmarks/python/drr_overhead.py
 /// times the same from Python and compares.
 void BM_ViewRenderer_ImageCAS_512det(benchmark::State& state) {
-  static const gimm::ViewRenderer renderer = [] {
-    gimm::PhantomOptions options;
-    options.seed = 1;
-    options.size = gimm::PhantomSize::imagecas;
-    const gimm::Phantom p = gimm::make_phantom(options);
-    return gimm::ViewRenderer(gimm::volume_cast<float>(p.hu), &p.label, gimm::RendererOptions{},
-                              "phantom");
-  }();
+  static const gimm::ViewRenderer renderer(gimm::volume_cast<float>(imagecas_phantom().hu),
+                                           &imagecas_phantom().label, gimm::RendererOptions{},
+                                           "phantom");
   const auto camera = test_camera(30);
   for (auto _ : state) {
     gimm::RenderedView view = renderer.render(camera);
