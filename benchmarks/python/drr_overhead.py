@@ -7,6 +7,10 @@ outputs), in one run on the same machine.
     PYTHONPATH=build/python benchmarks/python/drr_overhead.py build [--repeats 5] [--rounds 3]
 
 Interleaves the two (C++ then Python, --rounds times). Prints both medians and the overhead (Python / C++ - 1). Target (issue 19): <= 5%.
+
+Then the GIL: 4 renders on one OpenMP thread each, from one Python thread in turn against two
+Python threads at once (gimm.set_num_threads(1) in each): with the GIL released during a
+render, two threads take about half the time on two free cores.
 """
 import argparse
 import json
@@ -14,6 +18,7 @@ import os
 import statistics
 import subprocess
 import sys
+import threading
 import time
 
 import gimm
@@ -68,6 +73,24 @@ def main(argv=None):
     print(f"C++     {cpp * 1e3:8.2f} ms per 512^2 DRR (median of {n})")
     print(f"Python  {py * 1e3:8.2f} ms per 512^2 DRR (median of {n})")
     print(f"overhead {100 * (py / cpp - 1):+.1f}% ({gimm.get_num_threads()} threads)")
+
+    def render_single_threaded(count):
+        gimm.set_num_threads(1)  # per calling thread (OpenMP keeps it per thread)
+        for _ in range(count):
+            renderer.render(camera)
+
+    start = time.perf_counter()
+    render_single_threaded(4)
+    serial = time.perf_counter() - start
+    threads = [threading.Thread(target=render_single_threaded, args=(2,)) for _ in range(2)]
+    start = time.perf_counter()
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    parallel = time.perf_counter() - start
+    print(f"GIL: 4 single-threaded renders in {serial:.2f} s from one Python thread, "
+          f"{parallel:.2f} s from two ({serial / parallel:.2f}x)")
     return 0
 
 
