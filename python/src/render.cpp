@@ -6,6 +6,9 @@
 #include "gimm/core/rng.hpp"
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/render/view_renderer.hpp"
+#ifdef GIMM_PYTHON_HAVE_EMBREE
+#include "gimm/render/vessel_mesh_projector.hpp"
+#endif
 
 namespace gimm::python {
 
@@ -119,7 +122,7 @@ The prepared view renderer: prepare a patient once, render any number of C-arm v
 
 Renderer(volume, mask=None, *, geometry=None, spacing=None, origin=None, direction=None,
          recipe='angiography', pad_mm=80.0, projector='siddon', step_mm=0.0,
-         vessel_depth=False, min_chord_mm=1e-6, name='volume')
+         vessel_depth=False, min_chord_mm=1e-6, vessels='voxel', name='volume')
 
 volume: CT in HU [i, j, k] (nx, ny, nz), any real dtype (float32, int16, ...), any order; with
 recipe='none' it is attenuation in mm^-1 instead. mask: the injected system's vessel mask on the
@@ -128,9 +131,10 @@ returns it (dict), or spacing (3,) mm, origin (3,) world mm of voxel (0, 0, 0), 
 (3, 3) (the explicit ones win). recipe: 'angiography' (bone told from contrast by structure),
 'reference' (the released dataset's), 'none', or a dict of ContrastRecipe fields with 'preset'.
 pad_mm: tissue beyond the axial coverage (copies of the edge slices), 0 = air. projector:
-'siddon' (exact) or 'trilinear' (step_mm, 0 = the smallest spacing). vessel_depth: also the
-vessel depth and overlap count per pixel. Vessels are imaged in voxel mode (the mesh mode needs
-Embree and is not bound yet).
+'siddon' (exact) or 'trilinear' (step_mm, 0 = the smallest spacing). vessels: 'voxel' (the
+mask's voxels carry the contrast) or 'mesh' (the lumen as a surface mesh of the mask, traced by
+Embree: anti-aliased edges and an overlap count; gimm-dataset --vessels mesh). vessel_depth:
+also the vessel depth and overlap count per pixel.
 
 Copies: the volume and mask are copied once into gimm's own Volume (its storage is a
 std::vector), converted to float32 / uint8 on the way (a Fortran-ordered float32 array is one
@@ -142,7 +146,8 @@ several Python threads at once.)doc")
                        const py::object& spacing, const py::object& origin,
                        const py::object& direction, const py::handle& recipe, double pad_mm,
                        const std::string& projector, double step_mm, bool vessel_depth,
-                       double min_chord_mm, const std::string& name) {
+                       double min_chord_mm, const std::string& vessels_mode,
+                       const std::string& name) {
              const VolumeGeometry g = geometry_from(geometry, spacing, origin, direction);
              RendererOptions o;
              o.recipe = recipe_from(recipe);
@@ -150,6 +155,12 @@ several Python threads at once.)doc")
              o.projector = parse_projector(projector);
              o.step_mm = step_mm;
              o.vessel_depth = vessel_depth;
+             if (vessels_mode != "voxel" && vessels_mode != "mesh")
+               throw py::value_error("vessels must be 'voxel' or 'mesh', got '" + vessels_mode +
+                                     "'");
+             o.vessels = parse_vessel_mode(vessels_mode);
+             if (o.vessels == VesselMode::mesh && mask.is_none())
+               throw py::value_error("vessels='mesh' needs the vessel mask (mask=...)");
              o.min_chord_mm = min_chord_mm;
              Volume<float> ct = volume_from<float>(volume, g, Accept::real, name);
              std::optional<Volume<std::uint8_t>> vessels;
@@ -159,7 +170,17 @@ several Python threads at once.)doc")
              if (o.recipe.preset == ContrastPreset::none && !vessels)
                return std::make_unique<ViewRenderer>(
                    ViewRenderer::from_attenuation(std::move(ct), o, name));
-             return std::make_unique<ViewRenderer>(ct, vessels ? &*vessels : nullptr, o, name);
+             std::shared_ptr<const VesselSurface> surface;
+             if (o.vessels == VesselMode::mesh) {
+#ifdef GIMM_PYTHON_HAVE_EMBREE
+               surface = vessel_surface_from_mask(*vessels);
+#else
+               GIMM_CHECK(false, name << ": vessels='mesh' needs Embree, and this gimm module "
+                                         "was built without it (GIMM_WITH_EMBREE=OFF)");
+#endif
+             }
+             return std::make_unique<ViewRenderer>(ct, vessels ? &*vessels : nullptr, o, name,
+                                                   nullptr, std::move(surface));
            }),
            py::arg("volume"), py::arg("mask") = py::none(), py::kw_only(),
            py::arg("geometry") = py::none(), py::arg("spacing") = py::none(),
@@ -167,7 +188,7 @@ several Python threads at once.)doc")
            py::arg("recipe") = "angiography", py::arg("pad_mm") = kDefaultPadMm,
            py::arg("projector") = "siddon", py::arg("step_mm") = 0.0,
            py::arg("vessel_depth") = false, py::arg("min_chord_mm") = 1e-6,
-           py::arg("name") = "volume")
+           py::arg("vessels") = "voxel", py::arg("name") = "volume")
       .def(
           "render",
           [](const ViewRenderer& r, const py::handle& camera, bool intensity) {

@@ -1,10 +1,14 @@
 """Volumes and rendering from Python: zero-copy outputs, the same line integrals as gimm-drr and as
 an analytic chord-length computation, the GIL released, files and bad inputs."""
+import glob
+import json
+import os
 import threading
 import time
 import unittest
 
 import numpy as np
+from PIL import Image
 
 import gimm
 from common import carm, cli, is_capsule_view, lca, phantom, renderer, run, tmp_path
@@ -167,6 +171,42 @@ class RenderValues(unittest.TestCase):
         seen = r.unoccluded(carm(30, 20), points)
         self.assertEqual(seen.shape, (len(points),))
         self.assertGreater(seen.mean(), 0.5)
+
+    def test_mesh_vessels_as_gimm_dataset_renders_them(self):
+        """vessels='mesh' (Embree) gives gimm-dataset --vessels mesh's masks and images for the
+        same patient and views."""
+        exe = cli("gimm-dataset")
+        if exe is None:
+            self.skipTest("gimm-dataset not built")
+        root = tmp_path("mesh", "ds", "x")[:-2]
+        if not os.path.exists(os.path.join(root, "manifest.json")):
+            run(exe, "--phantom", 1, "--rows", 48, "--cols", 64, "--pixel", 4.0, "--seed", 3,
+                "--vessels", "mesh", "--out", root, "--quiet")
+        p = gimm.make_phantom(seed=3 * 1000003)  # the dataset's patient 0 (its seed rule)
+        lca_mask = gimm.split_coronary_systems(p["label"], p["geometry"])["lca"]
+        r = gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"], vessels="mesh")
+        views = glob.glob(os.path.join(root, "patients", "*", "views", "LCA_*.camera.json"))
+        self.assertEqual(len(views), 7)
+        for path in views:
+            camera = gimm.read_camera(path)
+            with open(path) as f:
+                window = json.load(f)["intensity_window"]
+            out = r.render(camera)
+            prefix = path[:-len(".camera.json")]
+            written_mask = np.asarray(Image.open(prefix + ".mask.png"))
+            np.testing.assert_array_equal(out["vessel_mask"] > 0, written_mask > 0, err_msg=path)
+            self.assertEqual(out["overlap"].dtype, np.uint8)  # the mesh mode's overlap count
+            # The PNG is the intensity min-max scaled to 16 bits (render/drr.hpp).
+            png = np.asarray(Image.open(prefix + ".png")).astype(np.float64) / 65535.0
+            expected = window["min"] + (window["max"] - window["min"]) * png
+            np.testing.assert_allclose(out["intensity"], expected,
+                                       atol=(window["max"] - window["min"]) / 65535.0)
+        voxel = gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"]).render(camera)
+        self.assertFalse(np.array_equal(voxel["intensity"], out["intensity"]))
+        with self.assertRaisesRegex(ValueError, "vessels must be 'voxel' or 'mesh', got 'x'"):
+            gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"], vessels="x")
+        with self.assertRaisesRegex(ValueError, "needs the vessel mask"):
+            gimm.Renderer(p["hu"], geometry=p["geometry"], vessels="mesh")
 
 
 class Torch(unittest.TestCase):
