@@ -265,3 +265,12 @@ class Dataset:
     def manifest(self) -> Dict[str, Any]: ...
     @property
     def root(self) -> str: ...
+
+
+# ---- X-ray angiography DICOM (in builds with GDCM) ------------------------------------------
+
+def read_xa_dicom(path: _Path, *, frame: Optional[int] = None,
+                  pitch_mm: Optional[float] = None) -> Dict[str, Any]:
+    """image (rows, cols) float32, carm (CArm), frame, frames, table_source, tags, warnings,
+    explain."""
+def write_xa_dicom(path: _Path, image: np.ndarray, carm: CArm, *, ge_table: bool = False) -> None: ...

@@ -360,5 +360,6 @@ void bind_volumes(py::module_& m);  // files, the phantom, anatomy, the view pro
 void bind_render(py::module_& m);   // the renderer, per-view and per-pair labels
 void bind_match(py::module_& m);    // the learned matcher, metrics
 void bind_dataset(py::module_& m);  // gimm-dataset folders
+void bind_dicom(py::module_& m);    // XA DICOM (built with GDCM only)
 
 }  // namespace gimm::python

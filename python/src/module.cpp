@@ -71,4 +71,7 @@ PYBIND11_MODULE(_gimm, m) {
   gimm::python::bind_render(m);
   gimm::python::bind_match(m);
   gimm::python::bind_dataset(m);
+#ifdef GIMM_PYTHON_HAVE_DICOM
+  gimm::python::bind_dicom(m);
+#endif
 }

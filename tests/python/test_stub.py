@@ -47,12 +47,14 @@ class Stubs(unittest.TestCase):
                   for t in [n.target] if isinstance(t, ast.Name)}
         public = {n for n in dir(native) if not n.startswith("_")} | {"__version__"}
         helpers = {"Geometry", "Centerlines"}  # typing-only names of the stub
+        optional = {"read_xa_dicom", "write_xa_dicom"}  # only in a build with GDCM
         self.assertEqual(public - names, set(), "missing from the stub")
-        self.assertEqual(names - public - helpers, set(), "in the stub but not in the module")
+        self.assertEqual(names - public - helpers - optional, set(),
+                         "in the stub but not in the module")
 
     def test_function_parameters_match(self):
         for node in stub().body:
-            if isinstance(node, ast.FunctionDef):
+            if isinstance(node, ast.FunctionDef) and hasattr(native, node.name):
                 self.assertEqual(params(node), documented_params(getattr(native, node.name)),
                                  node.name)
             if isinstance(node, ast.ClassDef) and hasattr(native, node.name):

@@ -562,7 +562,7 @@ inline Image<float> percentile_window(const std::vector<double>& values, int row
 /// and the tag or value at fault.
 inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& options = {}) {
   detail::quiet_gdcm();
-  GIMM_CHECK(std::filesystem::is_regular_file(path), path << ": no such file");
+  GIMM_CHECK_AS(IoError, std::filesystem::is_regular_file(path), path << ": no such file");
   detail::check_top_level_elements(path);
   gdcm::ImageReader reader;
   reader.SetFileName(path.c_str());
