@@ -280,6 +280,25 @@ extract_centerlines) or (N, 3) world mm. vessel_mask / overlap: that view's (row
 another vessel. Returns dict(uv (N, 2) pixels, depth (N,) mm, in_front, in_image, on_mask,
 visible, valid (N,) bool, overlap (N,) int32); valid = in front, on the detector and on the mask.)doc");
   m.def(
+      "farthest_point_sampling",
+      [](const py::handle& points, std::size_t count, std::uint64_t seed) {
+        const auto rows = rows_of(points, 3, "points");
+        std::vector<Eigen::Vector3d> world;
+        for (Eigen::Index r = 0; r < rows.rows(); ++r) world.push_back(rows.row(r).transpose());
+        Rng rng(seed);
+        std::vector<std::size_t> chosen;
+        {
+          py::gil_scoped_release release;
+          chosen = farthest_point_sampling(world, count, rng);
+        }
+        return adopt_vector(std::vector<std::int64_t>(chosen.begin(), chosen.end()));
+      },
+      py::arg("points"), py::arg("count"), py::arg("seed") = 0, R"doc(
+Farthest-point sampling in 3D (labels/correspondence.hpp): a seeded random first point, then
+repeatedly the point farthest from all chosen (ties: the lowest index). points: (N, 3) mm.
+Returns the indices (at most count, all distinct) as int64: label_pair's sparse labels are
+this over the pair's world_mm with the same seed, and the same works for one view's points.)doc");
+  m.def(
       "label_pair",
       [](const py::handle& points, const py::handle& camera_a, const py::handle& camera_b,
          const py::object& mask_a, const py::object& mask_b, std::size_t sparse_count,

@@ -293,6 +293,29 @@ branch_names, branch_systems ('LCA'/'RCA') and branch_parents (int32, -1 for a r
       py::arg("view_class"), py::arg("seed") = 0, py::arg("jitter_deg") = kViewJitterDeg,
       "Random angles (primary_deg, secondary_deg) of view class 1..11, uniform over its ranges "
       "widened by jitter_deg on both sides; deterministic per seed.");
+  m.def(
+      "plan_views",
+      [](const std::string& system, const std::string& mode, std::uint64_t seed,
+         double jitter_deg) {
+        Rng rng(seed);
+        const ViewPlan plan =
+            plan_views(parse_coronary_system(system), parse_view_mode(mode), rng, jitter_deg);
+        py::list views, pairs;
+        for (const SampledView& v : plan.views)
+          views.append(py::dict(py::arg("view_class") = v.view_class,
+                                py::arg("primary_deg") = v.primary_deg,
+                                py::arg("secondary_deg") = v.secondary_deg));
+        for (const ViewPairIndex& p : plan.pairs) pairs.append(py::make_tuple(p.a, p.b));
+        return py::dict(py::arg("views") = views, py::arg("pairs") = pairs);
+      },
+      py::arg("system"), py::kw_only(), py::arg("mode") = "shared", py::arg("seed") = 0,
+      py::arg("jitter_deg") = kViewJitterDeg, R"doc(
+The renders and pairs of one system, as gimm-dataset plans them (labels/protocol.hpp).
+system: 'LCA' or 'RCA'; mode: 'shared' (one view per routine class of the system, every pair of
+them: LCA 7 views / 21 pairs, RCA 4 / 6) or 'per_pair' (two fresh views for each pair).
+Returns dict(views: [dict(view_class, primary_deg, secondary_deg)], pairs: [(a, b)] indices
+into views, class A < class B). Deterministic per seed (gimm-dataset seeds each patient's plan
+from its own stream).)doc");
 }
 
 }  // namespace gimm::python

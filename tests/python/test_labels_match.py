@@ -59,6 +59,28 @@ class Anatomy(unittest.TestCase):
         with self.assertRaisesRegex(gimm.Error, "LCA"):
             gimm.view_class_from_angles(0, 0, system="LAD")
 
+    def test_plan_views_as_gimm_dataset_plans(self):
+        ranges = {v["id"]: v for v in gimm.routine_views()}
+        for system, classes in (("LCA", 7), ("RCA", 4)):
+            plan = gimm.plan_views(system, seed=5)
+            self.assertEqual(len(plan["views"]), classes)
+            self.assertEqual(len(plan["pairs"]), classes * (classes - 1) // 2)
+            self.assertEqual({ranges[v["view_class"]]["system"] for v in plan["views"]}, {system})
+            for v in plan["views"]:  # inside the class's ranges widened by the 5 deg jitter
+                lo, hi = ranges[v["view_class"]]["primary_deg"]
+                self.assertTrue(lo - 5 <= v["primary_deg"] <= hi + 5, v)
+                lo, hi = ranges[v["view_class"]]["secondary_deg"]
+                self.assertTrue(lo - 5 <= v["secondary_deg"] <= hi + 5, v)
+            for a, b in plan["pairs"]:
+                self.assertLess(plan["views"][a]["view_class"], plan["views"][b]["view_class"])
+            self.assertEqual(plan, gimm.plan_views(system, seed=5))
+            self.assertNotEqual(plan, gimm.plan_views(system, seed=6))
+            per_pair = gimm.plan_views(system, mode="per_pair", seed=5)
+            self.assertEqual(len(per_pair["views"]), 2 * len(plan["pairs"]))
+            self.assertEqual(per_pair["pairs"][0], (0, 1))
+        with self.assertRaisesRegex(gimm.Error, "shared|per_pair"):
+            gimm.plan_views("LCA", mode="both")
+
 
 class Labels(unittest.TestCase):
     def test_label_view_projects_with_the_camera(self):
@@ -90,6 +112,13 @@ class Labels(unittest.TestCase):
         np.testing.assert_allclose(a.camera().project(pair["world_mm"])[0], pair["points_a"])
         self.assertEqual(len(set(pair["sparse"].tolist())), 20)
         self.assertLess(pair["sparse"].max(), m)
+        # The sparse labels are farthest-point sampling of the dense ones' world points.
+        np.testing.assert_array_equal(
+            gimm.farthest_point_sampling(pair["world_mm"], 20, seed=1), pair["sparse"])
+        fps = gimm.farthest_point_sampling(pair["world_mm"], 5, seed=9)
+        d = np.linalg.norm(pair["world_mm"][:, None] - pair["world_mm"][fps[:4]][None], axis=2)
+        self.assertEqual(fps[4], d.min(axis=1).argmax())  # the farthest from the first four
+        self.assertEqual(len(gimm.farthest_point_sampling(pair["world_mm"][:3], 10)), 3)
         self.assertIs(pair["mask_a"], ma)
         # Exact predictions score perfectly under the protocol.
         exact = {"points_a": pair["points_a"], "points_b": pair["points_b"]}
