@@ -67,6 +67,25 @@ TEST_CASE("Dataset reader: dense columns are found by name", "[dataset]") {
   CHECK_THROWS_WITH(
       gimm::dense_labels_from_json(pair_with(fields, {{5, 6, 7, 0, 3, 4, "x", 2, 1}}), "h.json"),
       Catch::Contains("'u_a' must be a finite number"));
+  // Integers are checked before they are converted (libFuzzer: view_class_a 49e9 was converted
+  // to int, which is undefined).
+  for (const json& bad : {json(49e9), json(2.5), json(12), json(-1), json("1"),
+                          json(std::uint64_t(18446744073709551615ull))}) {
+    json j2 = pair_with(fields, json::array());
+    j2["view_class_a"] = bad;
+    CHECK_THROWS_WITH(gimm::pair_truth_from_json(j2, "p/x", "here.json"),
+                      Catch::Contains("here.json") && Catch::Contains("'view_class_a'") &&
+                          Catch::Contains("view class id 1..11") &&
+                          Catch::Contains(bad.dump()));
+  }
+  json unknown = pair_with(fields, json::array());
+  unknown.erase("view_class_b");
+  unknown["view_class_a"] = 0;
+  const gimm::PairTruth u = gimm::pair_truth_from_json(unknown, "p/x", "here.json");
+  CHECK((u.view_class_a == 0 && u.view_class_b == 0));
+  CHECK_THROWS_WITH(gimm::dense_labels_from_json(
+                        pair_with(fields, {{5, 6, 7, 0, 3, 4, 1, 2, 4294967296LL}}), "h.json"),
+                    Catch::Contains("'point' must be an integer in int's range, got 4294967296"));
   json no_fields = pair_with(fields, json::array());
   no_fields.erase("dense_fields");
   CHECK_THROWS_WITH(gimm::dense_labels_from_json(no_fields, "h.json"),

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -45,6 +46,13 @@ struct PairTruth {
 };
 
 namespace detail {
+/// True when `v` is a JSON integer in [lo, hi] (lo <= 0 <= hi), unsigned ones included: no
+/// conversion of another number to an integer type, which would be undefined or wrap.
+inline bool json_int_in(const nlohmann::json& v, std::int64_t lo, std::int64_t hi) {
+  if (v.is_number_unsigned()) return v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi);
+  return v.is_number_integer() && v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
+}
+
 /// Column of `name` in `fields` (a pair's dense_fields), or -1 when absent.
 inline int dense_column(const nlohmann::json& fields, const char* name) {
   for (std::size_t k = 0; k < fields.size(); ++k)
@@ -98,9 +106,11 @@ inline std::vector<Correspondence> dense_labels_from_json(const nlohmann::json& 
     c.world = {v[4], v[5], v[6]};
     const auto integer = [&](int column, const char* name) {
       const nlohmann::json& x = row[static_cast<std::size_t>(column)];
-      GIMM_CHECK_AS(FormatError, x.is_number_integer(),
-                    where << ": dense row " << r << ", '" << name << "' must be an integer, got "
-                          << x.dump());
+      GIMM_CHECK_AS(FormatError,
+                    detail::json_int_in(x, std::numeric_limits<int>::min(),
+                                std::numeric_limits<int>::max()),
+                    where << ": dense row " << r << ", '" << name
+                          << "' must be an integer in int's range, got " << x.dump());
       return x.get<int>();
     };
     if (branch >= 0) c.branch = integer(branch, "branch");
@@ -125,8 +135,19 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
   try {
     t.view_a = j.at("view_a").get<std::string>();
     t.view_b = j.at("view_b").get<std::string>();
-    t.view_class_a = j.value("view_class_a", kUnknownViewClass);
-    t.view_class_b = j.value("view_class_b", kUnknownViewClass);
+    // An id out of range, or a number that is not an integer (49e9), is refused: converting it
+    // to int would be undefined (found by libFuzzer).
+    const auto view_class_of = [&](const char* key) {
+      if (!j.contains(key)) return kUnknownViewClass;
+      const nlohmann::json& v = j.at(key);
+      GIMM_CHECK_AS(FormatError,
+                    detail::json_int_in(v, kUnknownViewClass, kNumViewClassIds - 1),
+                    where << ": '" << key << "' must be a view class id 1.." << kNumViewClassIds - 1
+                          << " (0 = unknown), got " << v.dump());
+      return v.get<int>();
+    };
+    t.view_class_a = view_class_of("view_class_a");
+    t.view_class_b = view_class_of("view_class_b");
     t.F = matrix_from_json<3, 3>(j, "F", where);
   } catch (const nlohmann::json::exception& e) {
     throw FormatError("gimm: " + where + ": " + e.what());
