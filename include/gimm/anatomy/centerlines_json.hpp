@@ -5,6 +5,7 @@
 ///                  "points": [[x, y, z], ...], "radius": [r, ...]}, ...]}
 /// `parent` is an index into "branches" (-1 for a root). Extra top-level keys are kept by
 /// callers (the phantom adds its anatomy record).
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -37,7 +38,11 @@ inline CenterlineTree centerlines_from_json(const nlohmann::json& j, const std::
       CenterlineBranch br;
       br.name = b.at("name").get<std::string>();
       br.system = parse_coronary_system(b.at("system").get<std::string>());
-      br.parent = b.at("parent").get<int>();
+      const nlohmann::json& parent = b.at("parent");
+      GIMM_CHECK_AS(FormatError, json_int_in(parent, -1, std::numeric_limits<int>::max()),
+                    what << ": branch '" << br.name
+                         << "': 'parent' must be a branch index or -1, got " << parent.dump());
+      br.parent = parent.get<int>();
       for (const auto& p : b.at("points")) {
         GIMM_CHECK_AS(FormatError, p.is_array() && p.size() == 3,
                       what << ": branch '" << br.name << "' has a point that is not [x, y, z]");

@@ -46,13 +46,6 @@ struct PairTruth {
 };
 
 namespace detail {
-/// True when `v` is a JSON integer in [lo, hi] (lo <= 0 <= hi), unsigned ones included: no
-/// conversion of another number to an integer type, which would be undefined or wrap.
-inline bool json_int_in(const nlohmann::json& v, std::int64_t lo, std::int64_t hi) {
-  if (v.is_number_unsigned()) return v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi);
-  return v.is_number_integer() && v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
-}
-
 /// Column of `name` in `fields` (a pair's dense_fields), or -1 when absent.
 inline int dense_column(const nlohmann::json& fields, const char* name) {
   for (std::size_t k = 0; k < fields.size(); ++k)
@@ -107,7 +100,7 @@ inline std::vector<Correspondence> dense_labels_from_json(const nlohmann::json& 
     const auto integer = [&](int column, const char* name) {
       const nlohmann::json& x = row[static_cast<std::size_t>(column)];
       GIMM_CHECK_AS(FormatError,
-                    detail::json_int_in(x, std::numeric_limits<int>::min(),
+                    json_int_in(x, std::numeric_limits<int>::min(),
                                 std::numeric_limits<int>::max()),
                     where << ": dense row " << r << ", '" << name
                           << "' must be an integer in int's range, got " << x.dump());
@@ -141,7 +134,7 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
       if (!j.contains(key)) return kUnknownViewClass;
       const nlohmann::json& v = j.at(key);
       GIMM_CHECK_AS(FormatError,
-                    detail::json_int_in(v, kUnknownViewClass, kNumViewClassIds - 1),
+                    json_int_in(v, kUnknownViewClass, kNumViewClassIds - 1),
                     where << ": '" << key << "' must be a view class id 1.." << kNumViewClassIds - 1
                           << " (0 = unknown), got " << v.dump());
       return v.get<int>();

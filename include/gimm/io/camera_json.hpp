@@ -24,6 +24,7 @@
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/carm.hpp"
+#include "gimm/io/files.hpp"
 
 namespace gimm {
 
@@ -126,11 +127,9 @@ inline Camerad camera_from_json(const nlohmann::json& j, const std::string& wher
   // size itself once it is an int.
   const auto side = [&](const char* key) {
     const nlohmann::json& v = j["image_size"][key];
-    const bool fits = v.is_number_unsigned()
-                          ? v.get<std::uint64_t>() <= std::uint64_t(std::numeric_limits<int>::max())
-                          : v.get<std::int64_t>() >= std::numeric_limits<int>::min();
-    GIMM_CHECK(fits, where << ": 'image_size' " << key << " is out of range: " << v.dump());
-    return static_cast<int>(v.get<std::int64_t>());
+    GIMM_CHECK(json_int_in(v, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()),
+               where << ": 'image_size' " << key << " is out of range: " << v.dump());
+    return v.get<int>();
   };
   const int rows = side("rows");
   const int cols = side("cols");

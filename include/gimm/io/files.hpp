@@ -354,6 +354,14 @@ void write_folder_all_or_nothing(const std::filesystem::path& target, Write&& wr
   staged.commit();
 }
 
+/// True when `v` is a JSON integer in [lo, hi] (lo <= 0 <= hi), unsigned ones included. Check
+/// with it before get<int>() and the like: nlohmann converts a double or a wider integer with a
+/// plain cast, which is undefined (49e9 -> int) or wraps (4294967360 -> 64).
+inline bool json_int_in(const nlohmann::json& v, std::int64_t lo, std::int64_t hi) {
+  if (v.is_number_unsigned()) return v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi);
+  return v.is_number_integer() && v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
+}
+
 /// Parses a JSON file; errors name the file and the parse position.
 inline nlohmann::json read_json_file(const std::filesystem::path& path) {
   const auto bytes = read_file_bytes(path);

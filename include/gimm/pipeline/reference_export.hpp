@@ -41,6 +41,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -158,8 +159,9 @@ inline std::string ref_string(const nlohmann::json& j, const char* key, const st
 
 inline int ref_int(const nlohmann::json& j, const char* key, const std::string& where) {
   const auto& v = ref_field(j, key, where);
-  GIMM_CHECK_AS(FormatError, v.is_number_integer(),
-                where << ": '" << key << "' must be an integer, got " << v.dump());
+  GIMM_CHECK_AS(FormatError,
+                json_int_in(v, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()),
+                where << ": '" << key << "' must be an integer in int's range, got " << v.dump());
   return v.get<int>();
 }
 
