@@ -129,10 +129,10 @@ struct MatchedCounts {
 
 /// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line.
 MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
-                        const std::vector<std::string>& ids, bool use_cameras,
-                        const std::filesystem::path& pred_dir,
-                        const gimm::CameraError& camera_error,
-                        const gimm::ImageDegradation& degradation, std::uint64_t seed) {
+                          const std::vector<std::string>& ids, bool use_cameras,
+                          const std::filesystem::path& pred_dir,
+                          const gimm::CameraError& camera_error,
+                          const gimm::ImageDegradation& degradation, std::uint64_t seed) {
   const auto start = std::chrono::steady_clock::now();
   MatchedCounts counts;
   for (std::size_t n = 0; n < ids.size(); ++n) {
@@ -207,9 +207,10 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
   // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
   // without F is written ungated.
   if (estimate_from > 0 && counts.without_F > 0)
-    std::printf("gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
-                "matches, or a degenerate fit); those pairs are not gated\n",
-                counts.without_F, ids.size(), estimate_from);
+    std::printf(
+        "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
+        "matches, or a degenerate fit); those pairs are not gated\n",
+        counts.without_F, ids.size(), estimate_from);
   return 0;
 }
 
@@ -507,11 +508,11 @@ int main(int argc, char** argv) {
       GIMM_CHECK(degradation.none() || matcher->needs_images(),
                  "--noise-photons/--blur-px degrade the images, and --method "
                      << method << " does not look at them");
-      const bool estimates_F = method == "learned" && geometry == "matches" &&
-                               options.gate.mode != gimm::GateMode::none;
+      const bool estimates_F =
+          method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
       return match_dataset(*matcher, dataset, split, geometry == "cameras",
-                           estimates_F ? options.gate.min_matches : 0,
-                           out, camera_error, degradation, seed);
+                           estimates_F ? options.gate.min_matches : 0, out, camera_error,
+                           degradation, seed);
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
     for (const char* flag :

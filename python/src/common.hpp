@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "gimm/core/image.hpp"
-#include "gimm/dataset/reader.hpp"
 #include "gimm/core/volume.hpp"
+#include "gimm/dataset/reader.hpp"
 #include "gimm/geometry/camera.hpp"
 
 namespace gimm::python {

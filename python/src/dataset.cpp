@@ -60,15 +60,14 @@ reads it). manifest: the manifest as a dict.)doc")
             return adopt_image(std::move(image));
           },
           py::arg("patient"), py::arg("view"))
-      .def_property_readonly("manifest",
-                             [](const DatasetReader& r) {
-                               return py::module_::import("json").attr("loads")(
-                                   r.manifest().dump());
-                             })
+      .def_property_readonly(
+          "manifest",
+          [](const DatasetReader& r) {
+            return py::module_::import("json").attr("loads")(r.manifest().dump());
+          })
       .def_property_readonly("root", [](const DatasetReader& r) { return r.root().string(); })
-      .def("__repr__", [](const DatasetReader& r) {
-        return "gimm.Dataset('" + r.root().string() + "')";
-      });
+      .def("__repr__",
+           [](const DatasetReader& r) { return "gimm.Dataset('" + r.root().string() + "')"; });
 }
 
 }  // namespace gimm::python

@@ -75,8 +75,7 @@ TEST_CASE("Dataset reader: dense columns are found by name", "[dataset]") {
     j2["view_class_a"] = bad;
     CHECK_THROWS_WITH(gimm::pair_truth_from_json(j2, "p/x", "here.json"),
                       Catch::Contains("here.json") && Catch::Contains("'view_class_a'") &&
-                          Catch::Contains("view class id 1..11") &&
-                          Catch::Contains(bad.dump()));
+                          Catch::Contains("view class id 1..11") && Catch::Contains(bad.dump()));
   }
   json unknown = pair_with(fields, json::array());
   unknown.erase("view_class_b");

@@ -127,10 +127,12 @@ TEST_CASE("NPY shapes are parsed exactly and checked against the file first", "[
                     Catch::Contains("2D shape"));
   // The exact form is still read.
   // Found by libFuzzer (UBSan: memcpy from a null buffer): an empty shape is refused by name.
-  CHECK_THROWS_WITH(gimm::read_npy_image<float>(npy_with_header("empty.npy", head + "(0, 6), }", 0)),
-                    Catch::Contains("empty.npy") && Catch::Contains("(0, 6) has no pixels"));
-  CHECK_THROWS_WITH(gimm::read_npy_image<float>(npy_with_header("empty2.npy", head + "(3, 0), }", 0)),
-                    Catch::Contains("(3, 0) has no pixels"));
+  CHECK_THROWS_WITH(
+      gimm::read_npy_image<float>(npy_with_header("empty.npy", head + "(0, 6), }", 0)),
+      Catch::Contains("empty.npy") && Catch::Contains("(0, 6) has no pixels"));
+  CHECK_THROWS_WITH(
+      gimm::read_npy_image<float>(npy_with_header("empty2.npy", head + "(3, 0), }", 0)),
+      Catch::Contains("(3, 0) has no pixels"));
   const auto ok = gimm::read_npy_image<float>(npy_with_header("ok.npy", head + "(2, 3), }", 24));
   CHECK((ok.rows() == 2 && ok.cols() == 3));
 }

@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -99,11 +99,11 @@ inline std::vector<Correspondence> dense_labels_from_json(const nlohmann::json& 
     c.world = {v[4], v[5], v[6]};
     const auto integer = [&](int column, const char* name) {
       const nlohmann::json& x = row[static_cast<std::size_t>(column)];
-      GIMM_CHECK_AS(FormatError,
-                    json_int_in(x, std::numeric_limits<int>::min(),
-                                std::numeric_limits<int>::max()),
-                    where << ": dense row " << r << ", '" << name
-                          << "' must be an integer in int's range, got " << x.dump());
+      GIMM_CHECK_AS(
+          FormatError,
+          json_int_in(x, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()),
+          where << ": dense row " << r << ", '" << name
+                << "' must be an integer in int's range, got " << x.dump());
       return x.get<int>();
     };
     if (branch >= 0) c.branch = integer(branch, "branch");
@@ -133,8 +133,7 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
     const auto view_class_of = [&](const char* key) {
       if (!j.contains(key)) return kUnknownViewClass;
       const nlohmann::json& v = j.at(key);
-      GIMM_CHECK_AS(FormatError,
-                    json_int_in(v, kUnknownViewClass, kNumViewClassIds - 1),
+      GIMM_CHECK_AS(FormatError, json_int_in(v, kUnknownViewClass, kNumViewClassIds - 1),
                     where << ": '" << key << "' must be a view class id 1.." << kNumViewClassIds - 1
                           << " (0 = unknown), got " << v.dump());
       return v.get<int>();
