@@ -176,7 +176,8 @@ several Python threads at once.)doc")
                surface = vessel_surface_from_mask(*vessels);
 #else
                GIMM_CHECK(false, name << ": vessels='mesh' needs Embree, and this gimm module "
-                                         "was built without it (GIMM_WITH_EMBREE=OFF)");
+                                         "was built without it (the setuptools wheel, or "
+                                         "CMake with GIMM_WITH_EMBREE=OFF)");
 #endif
              }
              return std::make_unique<ViewRenderer>(ct, vessels ? &*vessels : nullptr, o, name,
