@@ -4,9 +4,10 @@
 // Out (gimm -> numpy), no copy: an Image<T> or Volume<T> is moved to the heap, owned by a
 // py::capsule, and the returned array is a view of its buffer whose `base` is that capsule
 // (adopt_image, adopt_volume). The buffer lives as long as the array (or any view of it).
-// In (numpy -> gimm), one copy: Image<T> and Volume<T> own their storage (a std::vector), so an
-// input array is copied into them, converting its dtype and layout on the way (image_from,
-// volume_from). Small geometric arrays (points, matrices) are converted to Eigen by value.
+// In (numpy -> gimm): a volume is a view of the array when its dtype and layout are gimm's
+// (volume_in); otherwise, and for every Image<T> (which owns a std::vector), a copy converting
+// the dtype and layout on the way (image_from). Small geometric arrays (points, matrices) are
+// converted to Eigen by value.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl/filesystem.h>
@@ -17,6 +18,8 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "gimm/core/image.hpp"
@@ -250,39 +253,102 @@ Image<T> image_from(const py::handle& obj, Accept accept, const std::string& nam
   return image;
 }
 
-/// Copies a 3D array indexed [i, j, k] (any strides and real dtype) into a Volume<T> on
-/// `geometry` (its dims are taken from the array). A Fortran-ordered array of T is one memcpy.
+/// A 3D array indexed [i, j, k] as a gimm Volume<T> on `geometry` (its dims are taken from the
+/// array). `volume` is a view of the array's buffer, no copy, when the layout allows: dtype T (or
+/// bool for a uint8 mask: one byte, 0 or 1), Fortran order (i fastest, as gimm stores voxels) and
+/// writeable (gimm's Volume may write). Otherwise it is a copy converted from any strides and
+/// real dtype. `array` keeps the buffer alive while `volume` is used.
 template <class T>
-Volume<T> volume_from(const py::handle& obj, VolumeGeometry geometry, Accept accept,
-                      const std::string& name) {
-  const py::array a = checked_array(obj, 3, accept, name);
+struct VolumeInput {
+  py::array array;
+  Volume<T> volume;
+  bool is_view() const { return !volume.owns_data(); }
+};
+
+template <class T>
+VolumeInput<T> volume_in(const py::handle& obj, VolumeGeometry geometry, Accept accept,
+                         const std::string& name);
+
+/// An array's geometry, given as a dict and/or spacing, origin, direction (geometry_from).
+struct GeometryArgs {
+  py::object geometry, spacing = py::none(), origin = py::none(), direction = py::none();
+  bool given() const {
+    for (const py::object* o : {&geometry, &spacing, &origin, &direction})
+      if (*o && !o->is_none()) return true;
+    return false;
+  }
+};
+VolumeGeometry geometry_from(const py::object& geometry, const py::object& spacing = {},
+                             const py::object& origin = {}, const py::object& direction = {});
+
+/// volume_in for what a function takes: a gimm.Volume (read in place; it carries its geometry,
+/// so `args` must give none) or an array on the geometry `args` gives.
+template <class T>
+VolumeInput<T> volume_arg(const py::handle& obj, const GeometryArgs& args, Accept accept,
+                          const std::string& name);
+
+template <class T>
+VolumeInput<T> volume_in(const py::handle& obj, VolumeGeometry geometry, Accept accept,
+                         const std::string& name) {
+  VolumeInput<T> in{checked_array(obj, 3, accept, name), {}};
+  const py::array& a = in.array;
   for (int d = 0; d < 3; ++d) {
     if (a.shape(d) > 65536)
       throw py::value_error(name + ": dimension " + std::to_string(d) + " is " +
                             std::to_string(a.shape(d)) + ", more than 65536");
     geometry.dims[static_cast<std::size_t>(d)] = static_cast<int>(a.shape(d));
   }
-  Volume<T> volume(geometry);  // validates the geometry (gimm.Error naming "Volume")
+  geometry.validate("Volume");  // gimm.Error naming "Volume", before any copy
+  const bool same_type = a.dtype().is(py::dtype::of<T>()) ||
+                         (std::is_same_v<T, std::uint8_t> && a.dtype().is(py::dtype::of<bool>()));
+  if (same_type && (a.flags() & py::array::f_style) && a.writeable()) {
+    in.volume = Volume<T>::view(geometry, static_cast<T*>(const_cast<void*>(a.data())));
+    return in;
+  }
+  in.volume = Volume<T>(geometry);
   const char* base = static_cast<const char*>(a.data());
   const py::ssize_t s0 = a.strides(0), s1 = a.strides(1), s2 = a.strides(2);
-  if (a.dtype().is(py::dtype::of<T>()) && (a.flags() & py::array::f_style)) {
-    std::memcpy(volume.data(), base, volume.size() * sizeof(T));
-    return volume;
-  }
   bool out_of_range = false;
   dispatch_dtype(a, [&](auto tag) {
     using S = std::remove_const_t<std::remove_pointer_t<decltype(tag)>>;
-    T* out = volume.data();
-    for (int k = 0; k < volume.nz(); ++k)
-      for (int j = 0; j < volume.ny(); ++j) {
+    T* out = in.volume.data();
+    for (int k = 0; k < geometry.dims[2]; ++k)
+      for (int j = 0; j < geometry.dims[1]; ++j) {
         const char* row = base + j * s1 + k * s2;
-        for (int i = 0; i < volume.nx(); ++i)
+        for (int i = 0; i < geometry.dims[0]; ++i)
           *out++ = convert<T>(*reinterpret_cast<const S*>(row + i * s0), accept, out_of_range);
       }
   });
   if (out_of_range) throw py::value_error(name + ": mask values must be in [0, 255]");
-  return volume;
+  return in;
 }
+
+inline const char* dtype_name(const Volume<float>&) {
+  return "float32";
+}
+inline const char* dtype_name(const Volume<std::uint8_t>&) {
+  return "uint8";
+}
+inline const char* dtype_name(const Volume<std::int16_t>&) {
+  return "int16";
+}
+
+/// gimm.Volume: a float32 (CT, attenuation), int16 (CT) or uint8 (mask) volume and its geometry,
+/// over the caller's array when volume_in allows, holding the array (python/src/volumes.cpp).
+struct PyVolume {
+  std::variant<VolumeInput<float>, VolumeInput<std::uint8_t>, VolumeInput<std::int16_t>> in;
+
+  const VolumeGeometry& geometry() const {
+    return std::visit([](const auto& v) -> const VolumeGeometry& { return v.volume.geometry(); },
+                      in);
+  }
+  bool is_view() const {
+    return std::visit([](const auto& v) { return v.is_view(); }, in);
+  }
+  const char* dtype() const {
+    return std::visit([](const auto& v) { return dtype_name(v.volume); }, in);
+  }
+};
 
 // ---- volume geometry as a dict ------------------------------------------------------------
 
@@ -299,9 +365,8 @@ inline py::dict geometry_dict(const VolumeGeometry& g) {
 /// A geometry from a dict like geometry_dict's (dims ignored: they come from the array) and/or
 /// explicit spacing, origin, direction (which win). Missing entries: spacing 1 mm, origin 0,
 /// direction identity.
-inline VolumeGeometry geometry_from(const py::object& geometry, const py::object& spacing = {},
-                                    const py::object& origin = {},
-                                    const py::object& direction = {}) {
+inline VolumeGeometry geometry_from(const py::object& geometry, const py::object& spacing,
+                                    const py::object& origin, const py::object& direction) {
   VolumeGeometry g;
   auto entry = [&](const py::object& given, const char* key) -> py::object {
     if (given && !given.is_none()) return given;
@@ -319,6 +384,28 @@ inline VolumeGeometry geometry_from(const py::object& geometry, const py::object
   if (py::object d = entry(direction, "direction"); !d.is_none())
     g.direction = fixed<3, 3>(d, "direction");
   return g;
+}
+
+template <class T>
+VolumeInput<T> volume_arg(const py::handle& obj, const GeometryArgs& args, Accept accept,
+                          const std::string& name) {
+  if (!py::isinstance<PyVolume>(obj))
+    return volume_in<T>(
+        obj, geometry_from(args.geometry, args.spacing, args.origin, args.direction), accept, name);
+  const PyVolume& v = obj.cast<const PyVolume&>();
+  if (args.given())
+    throw py::value_error(name +
+                          ": a gimm.Volume carries its geometry: give no geometry, "
+                          "spacing, origin or direction with it");
+  const auto* in = std::get_if<VolumeInput<T>>(&v.in);
+  if (!in)
+    throw py::type_error(name + ": expected a gimm.Volume of dtype " + dtype_name(Volume<T>()) +
+                         ", got one of " + v.dtype());
+  // The same voxels, viewed again; `array` keeps them alive (the caller's array, or the
+  // gimm.Volume owning the copy).
+  VolumeInput<T> out{obj.attr("array").cast<py::array>(), {}};
+  out.volume = Volume<T>::view(in->volume.geometry(), const_cast<T*>(in->volume.data()));
+  return out;
 }
 
 // ---- cameras ------------------------------------------------------------------------------

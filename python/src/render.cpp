@@ -114,6 +114,47 @@ py::array_t<bool> bools(const std::vector<ProjectedPoint>& v, bool ProjectedPoin
   return out;
 }
 
+/// A CT as the renderer reads it: int16 arrays (and int16 gimm.Volumes) stay int16, read in
+/// place when Fortran-ordered; everything else is float32.
+using HuInput = std::variant<VolumeInput<float>, VolumeInput<std::int16_t>>;
+
+HuInput hu_arg(const py::handle& obj, const GeometryArgs& grid, const std::string& name) {
+  if (py::isinstance<PyVolume>(obj)) {
+    const std::string kind = obj.cast<const PyVolume&>().dtype();
+    if (kind == "int16") return volume_arg<std::int16_t>(obj, grid, Accept::real, name);
+    if (kind != "float32")
+      throw py::type_error(name +
+                           ": expected a gimm.Volume of dtype float32 or int16, got one "
+                           "of " +
+                           kind);
+    return volume_arg<float>(obj, grid, Accept::real, name);
+  }
+  const py::array a = checked_array(obj, 3, Accept::real, name);
+  if (a.dtype().is(py::dtype::of<std::int16_t>()))
+    return volume_arg<std::int16_t>(a, grid, Accept::real, name);
+  return volume_arg<float>(a, grid, Accept::real, name);
+}
+
+/// The renderer of `hu` (float or int16) with the options; the GIL is released by the caller.
+template <class H>
+std::unique_ptr<ViewRenderer> prepare_renderer(Volume<H>& hu, const Volume<std::uint8_t>* vessels,
+                                               const RendererOptions& o, const std::string& name) {
+  if constexpr (std::is_same_v<H, float>)
+    if (o.recipe.preset == ContrastPreset::none && !vessels)  // a copy made already is moved in
+      return std::make_unique<ViewRenderer>(ViewRenderer::from_attenuation(std::move(hu), o, name));
+  std::shared_ptr<const VesselSurface> surface;
+  if (o.vessels == VesselMode::mesh) {
+#ifdef GIMM_PYTHON_HAVE_EMBREE
+    surface = vessel_surface_from_mask(*vessels);
+#else
+    GIMM_CHECK(false, name << ": vessels='mesh' needs Embree, and this gimm module was built "
+                              "without it (the setuptools wheel, or CMake with "
+                              "GIMM_WITH_EMBREE=OFF)");
+#endif
+  }
+  return std::make_unique<ViewRenderer>(hu, vessels, o, name, nullptr, std::move(surface));
+}
+
 }  // namespace
 
 void bind_render(py::module_& m) {
@@ -124,9 +165,10 @@ Renderer(volume, mask=None, *, geometry=None, spacing=None, origin=None, directi
          recipe='angiography', pad_mm=80.0, projector='siddon', step_mm=0.0,
          vessel_depth=False, min_chord_mm=1e-6, vessels='voxel', name='volume')
 
-volume: CT in HU [i, j, k] (nx, ny, nz), any real dtype (float32, int16, ...), any order; with
-recipe='none' it is attenuation in mm^-1 instead. mask: the injected system's vessel mask on the
-same grid (bool or integer, nonzero = lumen), or None for a plain DRR. Geometry as read_volume
+volume: CT in HU [i, j, k] (nx, ny, nz), any real dtype (float32, int16, ...), any order, or a
+gimm.Volume (which carries its geometry); with recipe='none' it is attenuation in mm^-1 instead.
+mask: the injected system's vessel mask on the same grid (bool or integer, nonzero = lumen; an
+array or a uint8 gimm.Volume), or None for a plain DRR. Geometry of an array as read_volume
 returns it (dict), or spacing (3,) mm, origin (3,) world mm of voxel (0, 0, 0), direction
 (3, 3) (the explicit ones win). recipe: 'angiography' (bone told from contrast by structure),
 'reference' (the released dataset's), 'none', or a dict of ContrastRecipe fields with 'preset'.
@@ -136,11 +178,11 @@ mask's voxels carry the contrast) or 'mesh' (the lumen as a surface mesh of the 
 Embree: anti-aliased edges and an overlap count; gimm-dataset --vessels mesh). vessel_depth:
 also the vessel depth and overlap count per pixel.
 
-Copies: the volume and mask are copied once into gimm's own Volume (its storage is a
-std::vector), converted to float32 / uint8 on the way (a Fortran-ordered float32 array is one
-memcpy); the renderer then builds its attenuation volume from them (with recipe='none' the copy
-is moved in, not copied again) and the copies are freed. The arrays are not referenced after
-construction. The GIL is released while preparing and rendering; render() may be called from
+Copies: a float32 or int16 volume and a uint8 or bool mask in Fortran order (writeable) are
+read in place, no copy (see gimm.Volume); other dtypes and layouts are converted into a copy first. The
+renderer builds its own attenuation volume from them (with recipe='none' the attenuation itself
+is kept: a copy, moved in when one was made already) and any copies are freed. The arrays are
+not referenced after construction. The GIL is released while preparing and rendering; render() may be called from
 several Python threads at once.)doc")
       .def(py::init([](const py::handle& volume, const py::object& mask, const py::object& geometry,
                        const py::object& spacing, const py::object& origin,
@@ -148,7 +190,6 @@ several Python threads at once.)doc")
                        const std::string& projector, double step_mm, bool vessel_depth,
                        double min_chord_mm, const std::string& vessels_mode,
                        const std::string& name) {
-             const VolumeGeometry g = geometry_from(geometry, spacing, origin, direction);
              RendererOptions o;
              o.recipe = recipe_from(recipe);
              o.pad_mm = pad_mm;
@@ -162,26 +203,18 @@ several Python threads at once.)doc")
              if (o.vessels == VesselMode::mesh && mask.is_none())
                throw py::value_error("vessels='mesh' needs the vessel mask (mask=...)");
              o.min_chord_mm = min_chord_mm;
-             Volume<float> ct = volume_from<float>(volume, g, Accept::real, name);
-             std::optional<Volume<std::uint8_t>> vessels;
+             HuInput ct = hu_arg(volume, {geometry, spacing, origin, direction}, name);
+             const VolumeGeometry& grid = std::visit(
+                 [](const auto& in) -> const VolumeGeometry& { return in.volume.geometry(); }, ct);
+             std::optional<VolumeInput<std::uint8_t>> mask_in;
              if (!mask.is_none())
-               vessels = volume_from<std::uint8_t>(mask, g, Accept::mask, name + " mask");
+               mask_in = py::isinstance<PyVolume>(mask)
+                             ? volume_arg<std::uint8_t>(mask, {}, Accept::mask, name + " mask")
+                             : volume_in<std::uint8_t>(mask, grid, Accept::mask, name + " mask");
+             const Volume<std::uint8_t>* vessels = mask_in ? &mask_in->volume : nullptr;
              py::gil_scoped_release release;
-             if (o.recipe.preset == ContrastPreset::none && !vessels)
-               return std::make_unique<ViewRenderer>(
-                   ViewRenderer::from_attenuation(std::move(ct), o, name));
-             std::shared_ptr<const VesselSurface> surface;
-             if (o.vessels == VesselMode::mesh) {
-#ifdef GIMM_PYTHON_HAVE_EMBREE
-               surface = vessel_surface_from_mask(*vessels);
-#else
-               GIMM_CHECK(false, name << ": vessels='mesh' needs Embree, and this gimm module "
-                                         "was built without it (the setuptools wheel, or "
-                                         "CMake with GIMM_WITH_EMBREE=OFF)");
-#endif
-             }
-             return std::make_unique<ViewRenderer>(ct, vessels ? &*vessels : nullptr, o, name,
-                                                   nullptr, std::move(surface));
+             return std::visit(
+                 [&](auto& in) { return prepare_renderer(in.volume, vessels, o, name); }, ct);
            }),
            py::arg("volume"), py::arg("mask") = py::none(), py::kw_only(),
            py::arg("geometry") = py::none(), py::arg("spacing") = py::none(),

@@ -71,11 +71,11 @@ py::tuple read_as(const std::string& path) {
 }
 
 template <class T>
-void write_as(const std::string& path, const py::handle& array, const VolumeGeometry& g,
+void write_as(const std::string& path, const py::handle& array, const py::object& geometry,
               Accept accept, const std::string& description) {
-  const Volume<T> v = volume_from<T>(array, g, accept, "write_nifti: volume");
+  const VolumeInput<T> in = volume_arg<T>(array, {geometry}, accept, "write_nifti: volume");
   py::gil_scoped_release release;
-  write_nifti(path, v, description);
+  write_nifti(path, in.volume, description);
 }
 
 py::dict view_class_dict(const ViewClass& v) {
@@ -88,6 +88,53 @@ py::dict view_class_dict(const ViewClass& v) {
   return d;
 }
 
+/// gimm.Volume(array, geometry, ...): float32 unless dtype says uint8 or the array is a mask.
+PyVolume make_py_volume(const py::handle& array, const py::object& geometry,
+                        const py::object& spacing, const py::object& origin,
+                        const py::object& direction, const py::object& dtype) {
+  const VolumeGeometry g = geometry_from(geometry, spacing, origin, direction);
+  std::string kind = dtype.is_none() ? "" : py::str(dtype).cast<std::string>();
+  if (kind.empty() && (py::isinstance<py::array>(array) || py::hasattr(array, "__array__"))) {
+    const py::dtype t = py::module_::import("numpy").attr("asarray")(array).attr("dtype");
+    kind = t.is(py::dtype::of<bool>()) || t.is(py::dtype::of<std::uint8_t>()) ? "uint8"
+           : t.is(py::dtype::of<std::int16_t>())                              ? "int16"
+                                                                              : "float32";
+  }
+  if (kind.empty() || kind == "float32")
+    return PyVolume{volume_in<float>(array, g, Accept::real, "Volume")};
+  if (kind == "int16") return PyVolume{volume_in<std::int16_t>(array, g, Accept::real, "Volume")};
+  if (kind == "uint8") return PyVolume{volume_in<std::uint8_t>(array, g, Accept::mask, "Volume")};
+  throw py::value_error("Volume: dtype must be 'float32', 'int16' or 'uint8', got '" + kind + "'");
+}
+
+/// The voxels as an array: the caller's array for a view, else one over the owned copy whose
+/// base is the gimm.Volume (which the array keeps alive).
+py::array voxels_of(const py::object& self) {
+  const PyVolume& v = self.cast<const PyVolume&>();
+  if (v.is_view()) return std::visit([](const auto& in) { return in.array; }, v.in);
+  return std::visit(
+      [&](const auto& in) -> py::array {
+        using T = std::remove_const_t<std::remove_pointer_t<decltype(in.volume.data())>>;
+        const py::ssize_t s = sizeof(T), nx = in.volume.nx(), ny = in.volume.ny();
+        return py::array_t<T>({nx, ny, static_cast<py::ssize_t>(in.volume.nz())},
+                              {s, s * nx, s * nx * ny}, in.volume.data(), self);
+      },
+      v.in);
+}
+
+double voxel_at(const PyVolume& v, const py::tuple& ijk) {
+  if (ijk.size() != 3) throw py::index_error("Volume: index must be (i, j, k)");
+  const int i = ijk[0].cast<int>(), j = ijk[1].cast<int>(), k = ijk[2].cast<int>();
+  return std::visit(
+      [&](const auto& in) -> double {
+        if (!in.volume.contains(i, j, k))
+          throw py::index_error("Volume: voxel (" + std::to_string(i) + ", " + std::to_string(j) +
+                                ", " + std::to_string(k) + ") is outside the grid");
+        return static_cast<double>(in.volume(i, j, k));
+      },
+      v.in);
+}
+
 }  // namespace
 
 void bind_volumes(py::module_& m) {
@@ -95,6 +142,60 @@ void bind_volumes(py::module_& m) {
       "geometry: dict(spacing (3,) mm, origin (3,) world mm of voxel (0, 0, 0), direction (3, 3) "
       "columns = world axes of i, j, k), e.g. as read_volume returns it; missing entries: 1 mm, "
       "0, identity.";
+  // ---- gimm.Volume: an array and its geometry, read in place ------------------------------
+  py::class_<PyVolume>(m, "Volume", R"doc(
+A volume with its geometry, read by gimm in place of the caller's array where the layout allows.
+
+Volume(array, geometry=None, *, spacing=None, origin=None, direction=None, dtype=None)
+
+array: (nx, ny, nz) indexed [i, j, k]. dtype: 'float32' (a CT in HU, or attenuation), 'int16'
+(a CT in HU, as CCTAs are stored) or 'uint8' (a mask); None: 'uint8' for bool and uint8 arrays,
+'int16' for int16 arrays, else 'float32'. Geometry as read_volume
+returns it, or spacing (3,) mm, origin (3,) world mm of voxel (0, 0, 0), direction (3, 3).
+
+No copy (is_view True) when the array already is gimm's layout: the dtype asked for (bool too
+for uint8), Fortran order (i fastest: read_volume's arrays, numpy.asfortranarray(a), or the .T of
+a C-ordered (z, y, x) ITK array) and writeable. gimm then reads the caller's buffer, which the
+Volume keeps alive; writes to the array are seen by gimm. Otherwise (C order, other dtypes such
+as float64, int32, or int16 asked to be float32; a read-only array) one converted copy is made,
+once, here.
+Renderer, split_coronary_systems and the other volume functions take a Volume or an array;
+an array is read the same way at each call.)doc")
+      .def(py::init(&make_py_volume), py::arg("array"), py::arg("geometry") = py::none(),
+           py::kw_only(), py::arg("spacing") = py::none(), py::arg("origin") = py::none(),
+           py::arg("direction") = py::none(), py::arg("dtype") = py::none())
+      .def_property_readonly("is_view", &PyVolume::is_view,
+                             "True when gimm reads the caller's array (no copy was made).")
+      .def_property_readonly("dtype", &PyVolume::dtype, "'float32', 'int16' or 'uint8'.")
+      .def_property_readonly(
+          "shape",
+          [](const PyVolume& v) {
+            const auto& d = v.geometry().dims;
+            return py::make_tuple(d[0], d[1], d[2]);
+          },
+          "(nx, ny, nz).")
+      .def_property_readonly(
+          "geometry", [](const PyVolume& v) { return geometry_dict(v.geometry()); },
+          "dict(dims, spacing, origin, direction), as read_volume returns it.")
+      .def_property_readonly("array", &voxels_of,
+                             "The voxels gimm reads, (nx, ny, nz) Fortran order: the caller's "
+                             "array for a view, else an array over gimm's copy.")
+      .def("__getitem__", &voxel_at, py::arg("ijk"),
+           "The voxel (i, j, k) as gimm reads it (a float).")
+      .def(
+          "sample",
+          [](const PyVolume& v, const py::handle& world) {
+            const Eigen::Vector3d x = fixed<3, 1>(world, "sample: world");
+            return std::visit([&](const auto& in) { return in.volume.sample_world(x); }, v.in);
+          },
+          py::arg("world_mm"),
+          "Trilinear value at a world point (mm, LPS); 0 outside the voxel model.")
+      .def("__repr__", [](const PyVolume& v) {
+        const auto& d = v.geometry().dims;
+        return "gimm.Volume(" + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
+               std::to_string(d[2]) + ", " + v.dtype() + (v.is_view() ? ", view)" : ", copy)");
+      });
+
   // ---- files -------------------------------------------------------------------------------
   m.def(
       "read_volume",
@@ -118,15 +219,22 @@ Raises gimm.IoError naming the file when it cannot be read, gimm.FormatError whe
       "write_nifti",
       [](const std::filesystem::path& path, const py::handle& array, const py::object& geometry,
          const std::string& description) {
-        const VolumeGeometry g = geometry_from(geometry);
-        const py::array a = checked_array(array, 3, Accept::real, "write_nifti: volume");
         const std::string p = path.string();
+        if (py::isinstance<PyVolume>(array)) {
+          const std::string kind = array.cast<const PyVolume&>().dtype();
+          if (kind == "int16")
+            return write_as<std::int16_t>(p, array, geometry, Accept::real, description);
+          if (kind == "uint8")
+            return write_as<std::uint8_t>(p, array, geometry, Accept::mask, description);
+          return write_as<float>(p, array, geometry, Accept::real, description);
+        }
+        const py::array a = checked_array(array, 3, Accept::real, "write_nifti: volume");
         if (a.dtype().is(py::dtype::of<std::int16_t>()))
-          write_as<std::int16_t>(p, a, g, Accept::real, description);
+          write_as<std::int16_t>(p, a, geometry, Accept::real, description);
         else if (a.dtype().is(py::dtype::of<std::uint8_t>()) || a.dtype().is(py::dtype::of<bool>()))
-          write_as<std::uint8_t>(p, a, g, Accept::mask, description);
+          write_as<std::uint8_t>(p, a, geometry, Accept::mask, description);
         else
-          write_as<float>(p, a, g, Accept::real, description);
+          write_as<float>(p, a, geometry, Accept::real, description);
       },
       py::arg("path"), py::arg("volume"), py::arg("geometry") = py::none(),
       py::arg("description") = "gimm",
@@ -199,15 +307,15 @@ extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's b
       "split_coronary_systems",
       [](const py::handle& label, const py::object& geometry, std::int64_t min_voxels,
          bool allow_single) {
-        const Volume<std::uint8_t> v =
-            volume_from<std::uint8_t>(label, geometry_from(geometry), Accept::mask, "label");
+        const VolumeInput<std::uint8_t> in =
+            volume_arg<std::uint8_t>(label, {geometry}, Accept::mask, "label");
         SplitOptions o;
         o.min_voxels = min_voxels;
         o.allow_single = allow_single;
         CoronarySplit s;
         {
           py::gil_scoped_release release;
-          s = split_coronary_systems(v, o, "label");
+          s = split_coronary_systems(in.volume, o, "label");
         }
         py::dict d;
         d["lca"] = adopt_volume(std::move(s.lca));
@@ -230,9 +338,9 @@ extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's b
   m.def(
       "vessel_isocenter",
       [](const py::handle& mask, const py::object& geometry) {
-        return to_numpy(vessel_isocenter(
-            volume_from<std::uint8_t>(mask, geometry_from(geometry), Accept::mask, "mask"),
-            "mask"));
+        const VolumeInput<std::uint8_t> in =
+            volume_arg<std::uint8_t>(mask, {geometry}, Accept::mask, "mask");
+        return to_numpy(vessel_isocenter(in.volume, "mask"));
       },
       py::arg("mask"), py::arg("geometry") = py::none(),
       "The centroid of a vessel mask's nonzero voxels, world mm (3,): gimm's C-arm isocentre "
@@ -241,8 +349,8 @@ extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's b
       "extract_centerlines",
       [](const py::handle& mask, const py::object& geometry, const std::string& system,
          double min_spur_mm, double spur_radius_factor) {
-        const Volume<std::uint8_t> v =
-            volume_from<std::uint8_t>(mask, geometry_from(geometry), Accept::mask, "mask");
+        const VolumeInput<std::uint8_t> in =
+            volume_arg<std::uint8_t>(mask, {geometry}, Accept::mask, "mask");
         SkeletonOptions o;
         o.system = parse_coronary_system(system);
         o.min_spur_mm = min_spur_mm;
@@ -250,7 +358,7 @@ extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's b
         CenterlineTree tree;
         {
           py::gil_scoped_release release;
-          tree = extract_centerlines(v, o, "mask");
+          tree = extract_centerlines(in.volume, o, "mask");
         }
         return centerlines_dict(tree, std::nullopt);
       },

@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <vector>
 
 #include "gimm/core/rng.hpp"
 #include "gimm/core/volume.hpp"
@@ -206,4 +208,55 @@ TEST_CASE("grid_difference names the first property two grids disagree on", "[co
   b = a;
   b.direction.col(1) *= -1;  // a flipped j axis, same origin
   CHECK_THAT(grid_difference(a, b), Catch::Contains("direction of axis 1"));
+}
+
+TEST_CASE("Volume view: reads and writes the caller's buffer; copies own theirs",
+          "[core][volume]") {
+  const VolumeGeometry g = oblique_geometry();
+  std::vector<float> buffer(static_cast<std::size_t>(g.voxel_count()));
+  for (std::size_t n = 0; n < buffer.size(); ++n) buffer[n] = static_cast<float>(n);
+  Volume<float> view = Volume<float>::view(g, buffer.data());
+  CHECK_FALSE(view.owns_data());
+  CHECK(view.data() == buffer.data());
+  CHECK(view.size() == buffer.size());
+  // The same i-fastest order as an owning volume, in both directions.
+  CHECK(view(1, 2, 1) == buffer[1 + 5 * (2 + 4 * 1)]);
+  buffer[7] = -3.0f;
+  CHECK(view(2, 1, 0) == -3.0f);
+  view(4, 3, 2) = 99.0f;
+  CHECK(buffer.back() == 99.0f);
+  float sum = 0;
+  for (const float v : view) sum += v;
+  CHECK(sum == std::accumulate(buffer.begin(), buffer.end(), 0.0f));
+
+  // A copy owns its voxels: later writes to the buffer do not reach it.
+  const Volume<float> copy = view;
+  CHECK(copy.owns_data());
+  CHECK(copy.data() != buffer.data());
+  buffer[0] = 42.0f;
+  CHECK(copy(0, 0, 0) == 0.0f);
+  CHECK(copy.storage().size() == buffer.size());
+  // A moved view stays a view; the moved-from volume is empty.
+  Volume<float> moved = std::move(view);
+  CHECK_FALSE(moved.owns_data());
+  CHECK(moved(0, 0, 0) == 42.0f);
+  CHECK(view.size() == 0);  // NOLINT(bugprone-use-after-move): documented state
+  // A moved owning volume keeps its buffer (no copy) and its ownership.
+  Volume<float> owning(g, 1.0f);
+  const float* address = owning.data();
+  const Volume<float> taken = std::move(owning);
+  CHECK(taken.owns_data());
+  CHECK(taken.data() == address);
+  // Assigning a view over an owning volume makes it a view.
+  Volume<float> target(g, 0.0f);
+  target = Volume<float>::view(g, buffer.data());
+  CHECK(target.data() == buffer.data());
+
+  // A view has no vector; its geometry and buffer are checked.
+  CHECK_THROWS_WITH(moved.storage(), Catch::Contains("storage() of a view"));
+  VolumeGeometry bad = g;
+  bad.spacing[1] = 0;
+  CHECK_THROWS_WITH(Volume<float>::view(bad, buffer.data()),
+                    Catch::Contains("Volume view: spacing 1 must be finite and > 0, got 0"));
+  CHECK_THROWS_WITH(Volume<float>::view(g, nullptr), Catch::Contains("no buffer"));
 }

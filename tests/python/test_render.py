@@ -159,6 +159,117 @@ class RenderValues(unittest.TestCase):
         r = gimm.Renderer(zyx.T, lca(), geometry=p["geometry"])
         np.testing.assert_array_equal(r.render(camera)["line_integrals"], base)
 
+    def test_volume_reads_the_callers_array_in_place(self):
+        p = phantom()
+        hu = p["hu"].astype(np.float32, order="F")
+        v = gimm.Volume(hu, p["geometry"])
+        self.assertTrue(v.is_view)
+        self.assertEqual((v.dtype, v.shape), ("float32", hu.shape))
+        self.assertIs(v.array, hu)
+        # gimm reads the caller's memory: a write to the array is what gimm sees next.
+        self.assertEqual(v[10, 20, 30], float(hu[10, 20, 30]))
+        hu[10, 20, 30] = 1234.5
+        self.assertEqual(v[10, 20, 30], 1234.5)
+        world = gimm.Volume(hu, p["geometry"]).geometry
+        np.testing.assert_allclose(world["spacing"], p["geometry"]["spacing"])
+        # The Volume keeps the buffer alive after the caller drops it.
+        ref = hu.copy()
+        del hu
+        self.assertEqual(v[10, 20, 30], 1234.5)
+        np.testing.assert_array_equal(v.array, ref)
+        # int16 CTs (as make_phantom and most CCTA files hold them) and masks, uint8 and bool,
+        # in Fortran order are read in place too.
+        ct16 = gimm.Volume(p["hu"], p["geometry"])
+        self.assertTrue(ct16.is_view and ct16.dtype == "int16")
+        self.assertIs(ct16.array, p["hu"])
+        self.assertEqual(ct16[5, 6, 7], float(p["hu"][5, 6, 7]))
+        m = gimm.Volume(lca(), p["geometry"])
+        self.assertTrue(m.is_view and m.dtype == "uint8")
+        self.assertTrue(gimm.Volume(lca().astype(bool), p["geometry"]).is_view)
+
+    def test_volume_copies_when_the_layout_is_not_gimms(self):
+        p = phantom()
+        hu32 = p["hu"].astype(np.float32, order="F")
+        readonly = hu32.copy(order="F")
+        readonly.flags.writeable = False
+        for name, array, dtype in (("C order", np.ascontiguousarray(hu32), None),
+                                   ("int16 as float32", p["hu"], "float32"),
+                                   ("float64", hu32.astype(np.float64, order="F"), None),
+                                   ("read-only", readonly, None), ("strided", hu32[::2], None)):
+            v = gimm.Volume(array, p["geometry"], dtype=dtype)
+            self.assertFalse(v.is_view, name)
+            self.assertFalse(np.shares_memory(v.array, array), name)
+            self.assertTrue(v.array.flags.f_contiguous, name)
+            np.testing.assert_array_equal(v.array, array.astype(np.float32), err_msg=name)
+        # A copy is a copy: later writes to the caller's array are not seen.
+        c = np.ascontiguousarray(hu32)
+        v = gimm.Volume(c, p["geometry"])
+        c[1, 2, 3] = -999
+        self.assertEqual(v[1, 2, 3], float(hu32[1, 2, 3]))
+        # Its array's memory is gimm's copy, kept alive by the Volume.
+        a = v.array
+        del v
+        self.assertEqual(float(a[1, 2, 3]), float(hu32[1, 2, 3]))
+
+    def test_renderer_and_volume_functions_take_a_volume(self):
+        p = phantom()
+        camera = carm(-30, -20)
+        base = renderer().render(camera)
+        hu = gimm.Volume(p["hu"].astype(np.float32, order="F"), p["geometry"])
+        mask = gimm.Volume(lca(), p["geometry"])
+        hu16 = gimm.Volume(p["hu"], p["geometry"])
+        for v, m in ((hu, mask), (hu, lca()), (hu16, mask)):
+            view = gimm.Renderer(v, m).render(camera)
+            np.testing.assert_array_equal(view["line_integrals"], base["line_integrals"])
+            np.testing.assert_array_equal(view["vessel_mask"], base["vessel_mask"])
+        # int16 read in place gives what the float32 copy gives, in both projectors' paths.
+        for projector in ("siddon", "trilinear"):
+            a = gimm.Renderer(p["hu"], lca(), geometry=p["geometry"], projector=projector)
+            b = gimm.Renderer(p["hu"].astype(np.float32), lca(), geometry=p["geometry"],
+                              projector=projector)
+            np.testing.assert_array_equal(a.render(camera)["line_integrals"],
+                                          b.render(camera)["line_integrals"])
+        split = gimm.split_coronary_systems(gimm.Volume(p["label"], p["geometry"]))
+        np.testing.assert_array_equal(split["lca"], lca())
+        np.testing.assert_allclose(gimm.vessel_isocenter(mask),
+                                   gimm.vessel_isocenter(lca(), p["geometry"]))
+        # recipe='none' keeps the attenuation: a view is copied, so the caller's later writes
+        # do not reach the renderer.
+        mu = np.full((20, 20, 20), 0.02, np.float32, order="F")
+        r = gimm.Renderer(gimm.Volume(mu, spacing=[2, 2, 2]), recipe="none", pad_mm=0)
+        cam = gimm.CArm(rows=32, cols=32, pixel_mm=4.0).camera()
+        before = r.render(cam)["line_integrals"].copy()
+        mu[:] = 5.0
+        np.testing.assert_array_equal(r.render(cam)["line_integrals"], before)
+        self.assertGreater(before.max(), 0.5)
+
+    def test_volume_refusals(self):
+        p = phantom()
+        hu = gimm.Volume(p["hu"], p["geometry"])
+        with self.assertRaisesRegex(ValueError, "carries its geometry"):
+            gimm.Renderer(hu, geometry=p["geometry"])
+        with self.assertRaisesRegex(TypeError, "mask: expected a gimm.Volume of dtype uint8, got "
+                                               "one of int16"):
+            gimm.Renderer(hu, hu)
+        with self.assertRaisesRegex(TypeError, "volume: expected a gimm.Volume of dtype float32 "
+                                               "or int16, got one of uint8"):
+            gimm.Renderer(gimm.Volume(lca(), p["geometry"]))
+        with self.assertRaisesRegex(ValueError, "dtype must be 'float32', 'int16' or 'uint8', "
+                                                "got 'float64'"):
+            gimm.Volume(p["hu"], dtype="float64")
+        with self.assertRaisesRegex(gimm.Error, "recipe 'none'.*must be float, not an integer"):
+            gimm.Renderer(p["hu"], geometry=p["geometry"], recipe="none")
+        with self.assertRaisesRegex(IndexError, r"voxel \(128, 0, 0\) is outside"):
+            hu[128, 0, 0]
+        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be finite and > 0, got -1"):
+            gimm.Volume(p["hu"], spacing=[-1, 1, 1])
+        with self.assertRaisesRegex(ValueError, "Volume: expected a 3D array"):
+            gimm.Volume(np.zeros((4, 4), np.float32))
+        with self.assertRaisesRegex(ValueError, "mask values must be in"):
+            gimm.Volume(np.full((2, 2, 2), 300, np.int32), dtype="uint8")
+        with self.assertRaisesRegex(gimm.Error, "image and label grids disagree: dimensions"):
+            gimm.Renderer(hu, np.zeros((4, 4, 4), np.uint8))
+
     def test_vessel_depth_and_occlusion(self):
         p = phantom()
         r = gimm.Renderer(p["hu"], lca(), geometry=p["geometry"], vessel_depth=True)

@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/core/rng.hpp"
@@ -184,6 +185,41 @@ TEST_CASE("View renderer: from_attenuation and recipe none equal the hand-assemb
     // No vessels: nothing is occluded.
     CHECK(moved.unoccluded(camera, Eigen::Vector3d(0, -7, 0)));
   }
+}
+
+TEST_CASE("View renderer: volume views render as the volumes they view",
+          "[render][view_renderer]") {
+  const Scene& s = scene();
+  std::vector<float> hu(s.hu.begin(), s.hu.end());
+  std::vector<std::uint8_t> tubes(s.tubes.begin(), s.tubes.end());
+  const Volume<float> hu_view = Volume<float>::view(s.hu.geometry(), hu.data());
+  const Volume<std::uint8_t> tubes_view =
+      Volume<std::uint8_t>::view(s.tubes.geometry(), tubes.data());
+  RendererOptions options;
+  options.vessel_depth = true;
+  const ViewRenderer owned(s.hu, &s.tubes, options), viewed(hu_view, &tubes_view, options);
+  const Camerad camera = test_cameras()[1];
+  const RenderedView a = owned.render(camera), b = viewed.render(camera);
+  CHECK(a.line_integrals.storage() == b.line_integrals.storage());
+  CHECK(a.vessel_mask.storage() == b.vessel_mask.storage());
+  CHECK(a.depth_mm.storage() == b.depth_mm.storage());
+
+  // Attenuation given as a view is copied in: the renderer outlives the caller's buffer.
+  ContrastRecipe recipe;
+  recipe.preset = ContrastPreset::reference;
+  const Volume<float> mu = make_attenuation(s.hu, &s.tubes, recipe);
+  std::vector<float> mu_buffer(mu.begin(), mu.end());
+  RendererOptions none;
+  none.recipe.preset = ContrastPreset::none;
+  const ViewRenderer from_view =
+      ViewRenderer::from_attenuation(Volume<float>::view(mu.geometry(), mu_buffer.data()), none);
+  const ViewRenderer from_volume = ViewRenderer::from_attenuation(Volume<float>(mu), none);
+  CHECK(from_view.attenuation().mu.owns_data());
+  const Image<float> before = from_view.render(camera).line_integrals;
+  std::fill(mu_buffer.begin(), mu_buffer.end(), 1.0f);
+  mu_buffer = {};  // freed
+  CHECK(from_view.render(camera).line_integrals.storage() == before.storage());
+  CHECK(from_volume.render(camera).line_integrals.storage() == before.storage());
 }
 
 TEST_CASE("View renderer: voxel depth and overlap equal the mask walk per pixel",

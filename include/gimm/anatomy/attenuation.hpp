@@ -148,7 +148,9 @@ struct DenseTissue {
   std::int64_t blood_voxels = 0, bone_voxels = 0;
 };
 
-inline DenseTissue classify_dense_tissue(const Volume<float>& hu, const ContrastRecipe& recipe) {
+/// `hu`: any real voxel type (float, or int16 as CCTAs are stored).
+template <class H>
+DenseTissue classify_dense_tissue(const Volume<H>& hu, const ContrastRecipe& recipe) {
   const auto n = static_cast<std::int64_t>(hu.size());
   Volume<std::uint8_t> dense(hu.geometry(), 0);
   for (std::int64_t v = 0; v < n; ++v) dense.data()[v] = hu.data()[v] >= recipe.blood_pool_lo_hu;
@@ -191,8 +193,8 @@ inline DenseTissue classify_dense_tissue(const Volume<float>& hu, const Contrast
 /// injected lumen) or no injection when null. NaN HU is an error naming the voxel. The
 /// angiography preset classifies the dense tissue itself unless `dense` (classify_dense_tissue
 /// of the same `hu` and recipe) is given, e.g. once for both systems of a patient.
-template <class T>
-Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injected,
+template <class T, class H>
+Volume<float> make_attenuation(const Volume<H>& hu, const Volume<T>* injected,
                                const ContrastRecipe& recipe, const std::string& name = "volume",
                                const DenseTissue* dense = nullptr) {
   if (injected) {
@@ -202,7 +204,7 @@ Volume<float> make_attenuation(const Volume<float>& hu, const Volume<T>* injecte
                                                    << hu.ny() << "x" << hu.nz());
   }
   Volume<float> mu(hu.geometry(), 0.0f);
-  const float* in = hu.data();
+  const H* in = hu.data();
   float* out = mu.data();
   const auto n = static_cast<std::int64_t>(hu.size());
   for (std::int64_t v = 0; v < n; ++v)  // before the structure: NaN would fall out of it

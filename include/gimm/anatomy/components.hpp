@@ -90,7 +90,7 @@ struct SplitOptions {
 template <class T>
 CoronarySplit split_coronary_systems(const Volume<T>& label, const SplitOptions& options = {},
                                      const std::string& name = "label") {
-  for (const T v : label.storage())
+  for (const T v : label)
     GIMM_CHECK(v == T(0) || v == T(1),
                name << ": coronary label must hold only 0 and 1, found " << +v);
   const Components comps = connected_components(label);

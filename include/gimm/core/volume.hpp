@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -100,14 +101,50 @@ inline void check_same_grid(const VolumeGeometry& image, const VolumeGeometry& l
   GIMM_CHECK(difference.empty(), what << ": image and label grids disagree: " << difference);
 }
 
+/// Owns its voxels (a std::vector), or, made by Volume::view, reads and writes a buffer it does
+/// not own (a numpy array, a memory-mapped file): a zero-copy input. Every function that takes a
+/// Volume takes a view alike. Copies always own their voxels (a copy of a view is a deep copy);
+/// a moved view stays a view. The buffer must outlive the view and its moves.
 template <class T>
 class Volume {
  public:
   Volume() = default;
   explicit Volume(const VolumeGeometry& geometry, T fill = T{}) : geometry_(geometry) {
     geometry_.validate("Volume");
-    data_.assign(static_cast<std::size_t>(geometry_.voxel_count()), fill);
+    own_.assign(static_cast<std::size_t>(geometry_.voxel_count()), fill);
+    data_ = own_.data();
+    size_ = own_.size();
   }
+  /// A view over `data`: geometry.voxel_count() voxels, i fastest (data[i + nx * (j + ny * k)]).
+  static Volume view(const VolumeGeometry& geometry, T* data) {
+    geometry.validate("Volume view");
+    GIMM_CHECK(data != nullptr, "Volume view: no buffer (null pointer)");
+    Volume v;
+    v.geometry_ = geometry;
+    v.data_ = data;
+    v.size_ = static_cast<std::size_t>(geometry.voxel_count());
+    return v;
+  }
+
+  Volume(const Volume& other)
+      : geometry_(other.geometry_), own_(other.data_, other.data_ + other.size_) {
+    data_ = own_.data();
+    size_ = own_.size();
+  }
+  Volume(Volume&& other) noexcept { swap(other); }
+  Volume& operator=(Volume other) noexcept {
+    swap(other);
+    return *this;
+  }
+  void swap(Volume& other) noexcept {
+    std::swap(geometry_, other.geometry_);
+    own_.swap(other.own_);  // the buffers keep their addresses: data_ stays valid
+    std::swap(data_, other.data_);
+    std::swap(size_, other.size_);
+  }
+
+  /// False for a view (Volume::view and its moves).
+  bool owns_data() const { return data_ == nullptr || data_ == own_.data(); }
 
   const VolumeGeometry& geometry() const { return geometry_; }
   const std::array<int, 3>& dims() const { return geometry_.dims; }
@@ -117,7 +154,7 @@ class Volume {
   const Eigen::Vector3d& spacing() const { return geometry_.spacing; }
   const Eigen::Vector3d& origin() const { return geometry_.origin; }
   const Eigen::Matrix3d& direction() const { return geometry_.direction; }
-  std::size_t size() const { return data_.size(); }
+  std::size_t size() const { return size_; }
 
   std::size_t linear_index(int i, int j, int k) const {
     return static_cast<std::size_t>(i) +
@@ -163,14 +200,26 @@ class Volume {
     return sample_index(world_to_index(world), outside);
   }
 
-  T* data() { return data_.data(); }
-  const T* data() const { return data_.data(); }
-  std::vector<T>& storage() { return data_; }
-  const std::vector<T>& storage() const { return data_; }
+  T* data() { return data_; }
+  const T* data() const { return data_; }
+  T* begin() { return data_; }
+  T* end() { return data_ + size_; }
+  const T* begin() const { return data_; }
+  const T* end() const { return data_ + size_; }
+  /// The owned voxels as a vector (comparisons in tests, moving the buffer out); a view has none.
+  std::vector<T>& storage() { return owned_storage(); }
+  const std::vector<T>& storage() const { return const_cast<Volume*>(this)->owned_storage(); }
 
  private:
+  std::vector<T>& owned_storage() {
+    GIMM_CHECK(owns_data(), "Volume: storage() of a view (it owns no vector; use begin()/end())");
+    return own_;
+  }
+
   VolumeGeometry geometry_;
-  std::vector<T> data_;
+  std::vector<T> own_;
+  T* data_ = nullptr;
+  std::size_t size_ = 0;
 };
 
 /// Element-wise conversion to another voxel type on the same grid (static_cast per voxel).

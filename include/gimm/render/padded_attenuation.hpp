@@ -21,8 +21,10 @@ struct PaddedAttenuation {
   AxialPads<float> pads;  ///< siddon only; empty otherwise
 };
 
-/// From a volume that already is attenuation (mm^-1): its edge slices carry on.
+/// From a volume that already is attenuation (mm^-1): its edge slices carry on. The result owns
+/// its voxels: a view (Volume::view) is copied, as the renderer outlives its caller's buffer.
 inline PaddedAttenuation padded_attenuation(Volume<float> mu, double pad_mm, Projector projector) {
+  if (!mu.owns_data()) mu = Volume<float>(static_cast<const Volume<float>&>(mu));
   if (projector == Projector::siddon) {
     AxialPads<float> pads = axial_pads(mu, pad_mm);
     return {std::move(mu), std::move(pads)};
@@ -32,8 +34,8 @@ inline PaddedAttenuation padded_attenuation(Volume<float> mu, double pad_mm, Pro
 
 /// make_attenuation(hu, injected, recipe, name, dense) with `pad_mm` of the patient beyond the
 /// scan on both axial sides (uninjected), for `projector`.
-template <class T>
-PaddedAttenuation padded_attenuation(const Volume<float>& hu, const Volume<T>* injected,
+template <class T, class H>
+PaddedAttenuation padded_attenuation(const Volume<H>& hu, const Volume<T>* injected,
                                      const ContrastRecipe& recipe, double pad_mm,
                                      Projector projector, const std::string& name = "volume",
                                      const DenseTissue* dense = nullptr) {
@@ -42,7 +44,7 @@ PaddedAttenuation padded_attenuation(const Volume<float>& hu, const Volume<T>* i
     dense = &own.emplace(classify_dense_tissue(hu, recipe));
   // A pad's voxels keep the class of the edge voxel they continue: a one-voxel slab has no
   // structure of its own to classify.
-  const auto attenuate = [&](const Volume<float>& hu_pad, Volume<std::uint8_t>* classes) {
+  const auto attenuate = [&](const Volume<H>& hu_pad, Volume<std::uint8_t>* classes) {
     DenseTissue carried;
     if (classes) carried.classes = std::move(*classes);
     return make_attenuation<std::uint8_t>(hu_pad, nullptr, recipe, name + " (axial pad)",
@@ -51,7 +53,7 @@ PaddedAttenuation padded_attenuation(const Volume<float>& hu, const Volume<T>* i
   if (projector == Projector::siddon) {
     Volume<float> mu = make_attenuation(hu, injected, recipe, name, dense);
     if (pad_mm == 0) return {std::move(mu), {}};
-    const AxialPads<float> hu_pads = axial_pads(hu, pad_mm);
+    const AxialPads<H> hu_pads = axial_pads(hu, pad_mm);
     AxialPads<std::uint8_t> class_pads;
     if (dense) class_pads = axial_pads(dense->classes, pad_mm);
     AxialPads<float> pads{attenuate(hu_pads.below, dense ? &class_pads.below : nullptr),

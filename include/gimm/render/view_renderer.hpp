@@ -20,6 +20,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #include "gimm/anatomy/attenuation.hpp"
@@ -77,12 +78,14 @@ struct RenderedView {
 
 class ViewRenderer {
  public:
-  /// `volume`: the CT in HU (or attenuation in mm^-1 when options.recipe.preset is none).
+  /// `volume`: the CT in HU, float or int16 (or attenuation in mm^-1, float only, when
+  /// options.recipe.preset is none); a Volume view of the caller's buffer is read in place.
   /// `vessels`: the injected system's mask on the same grid (nonzero = lumen), or nullptr for a
   /// plain DRR without vessel outputs. `surface`: the vessels' surface, required in mesh mode.
   /// `dense`: the dense-tissue classes of `volume` when already computed (angiography recipe).
-  /// `name` prefixes error messages.
-  ViewRenderer(const Volume<float>& volume, const Volume<std::uint8_t>* vessels,
+  /// `name` prefixes error messages. Nothing of `volume` or `vessels` is kept.
+  template <class H>
+  ViewRenderer(const Volume<H>& volume, const Volume<std::uint8_t>* vessels,
                const RendererOptions& options, const std::string& name = "volume",
                const DenseTissue* dense = nullptr,
                std::shared_ptr<const VesselSurface> surface = nullptr)
@@ -93,8 +96,13 @@ class ViewRenderer {
     if (options.recipe.preset == ContrastPreset::none) {
       GIMM_CHECK(!vessels, name << ": with the recipe 'none' the volume already is attenuation: "
                                    "it has no injection to add (give no vessel mask)");
-      check_attenuation(volume, name);
-      attenuation_ = padded_attenuation(volume, options.pad_mm, options.projector);
+      if constexpr (std::is_same_v<H, float>) {
+        check_attenuation(volume, name);
+        attenuation_ = padded_attenuation(volume, options.pad_mm, options.projector);
+      } else {
+        GIMM_FAIL(name << ": with the recipe 'none' the volume is attenuation in mm^-1 and must "
+                          "be float, not an integer type");
+      }
     } else {
       const bool mesh = options.vessels == VesselMode::mesh;
       // The angiography recipe's bone/contrast classes, found once for the attenuation and the
@@ -199,7 +207,8 @@ class ViewRenderer {
   /// The mean attenuation the injection adds inside the lumen, with the dense-tissue classes the
   /// attenuation used (a lumen voxel's uninjected value is blood, not bone); `dense` is given
   /// whenever the recipe classifies.
-  static double lumen_gain(const Volume<float>& hu, const Volume<std::uint8_t>& vessels,
+  template <class H>
+  static double lumen_gain(const Volume<H>& hu, const Volume<std::uint8_t>& vessels,
                            const ContrastRecipe& recipe, const DenseTissue* dense) {
     double injected = 0, plain = 0;
     std::size_t count = 0;
