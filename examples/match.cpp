@@ -360,6 +360,9 @@ int main(int argc, char** argv) {
   app.add_option("--tolerance", geometric.epipolar_tolerance_px,
                  "geometric: epipolar tolerance, px (calibration error of real C-arms)")
       ->capture_default_str();
+  app.add_option("--order-cost", geometric.w_order,
+                 "geometric: cost of going back along a chain of B (ordering), 0 = no term")
+      ->capture_default_str();
   app.add_option("--camera-error-deg", camera_error.deg,
                  "dataset mode: rotate each view's camera given to the matcher by this many "
                  "degrees about both axes across the view (random signs, --seed), images exact")
@@ -454,6 +457,7 @@ int main(int argc, char** argv) {
     };
     // A flag of one method given to another would be silently ignored: refuse it instead.
     const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
+                                                                {"--order-cost", "geometric"},
                                                                 {"--segment", "geometric"},
                                                                 {"--exact-vesselness", "geometric"},
                                                                 {"--sigma", "oracle"},

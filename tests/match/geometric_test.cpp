@@ -162,51 +162,112 @@ TEST_CASE("Centerline graph: one chain along a bar, radius from the distance",
   CHECK(gimm::centerline_graph(m).branches.size() == 3);
 }
 
+namespace {
+
+/// Two 3D curves seen from LAO 30 / RAO 30 at 128 px, their masks drawn 3 px wide.
+struct TwoCurveScene {
+  gimm::Camerad ca = carm_camera(30, 10, 128), cb = carm_camera(-30, -5, 128);
+  std::vector<Eigen::Vector3d> dense;  ///< both curves, finely sampled
+  gimm::Image<std::uint8_t> ma, mb;
+
+  TwoCurveScene() {
+    std::vector<Eigen::Vector3d> c1, c2;
+    for (int k = 0; k <= 20; ++k) {
+      const double t = k / 20.0;
+      c1.emplace_back(-40 + 80 * t, 15 * std::sin(3 * t), 10 * t - 20);
+      c2.emplace_back(10 * std::cos(2 * t) - 20, -35 + 70 * t, 25 * t);
+    }
+    ma = draw_curve(ca, c1, 1);
+    mb = draw_curve(cb, c1, 1);
+    const auto ma2 = draw_curve(ca, c2, 1), mb2 = draw_curve(cb, c2, 1);
+    for (std::size_t i = 0; i < ma.size(); ++i) {
+      ma.data()[i] |= ma2.data()[i];
+      mb.data()[i] |= mb2.data()[i];
+    }
+    for (const auto* curve : {&c1, &c2})
+      for (std::size_t k = 0; k + 1 < curve->size(); ++k)
+        for (int s = 0; s < 100; ++s)
+          dense.push_back((*curve)[k] + ((*curve)[k + 1] - (*curve)[k]) * (s / 100.0));
+  }
+
+  std::vector<gimm::GeometricMatch> match(const gimm::GeometricOptions& o) const {
+    const auto iso = gimm::pair_isocentre(ca, cb);
+    return gimm::geometric_matches(gimm::vessel_view(nullptr, &ma, ca, iso, o),
+                                   gimm::vessel_view(nullptr, &mb, cb, iso, o), o);
+  }
+
+  /// Matches whose b is within 2 px of the projection of the curve point seen at a.
+  int on_truth(const std::vector<gimm::GeometricMatch>& matches) const {
+    int good = 0;
+    for (const auto& m : matches) {
+      double best = 1e300;
+      Eigen::Vector2d expected = Eigen::Vector2d::Zero();
+      for (const auto& X : dense)
+        if (const double d = (ca.project(X).uv - m.a).norm(); d < best)
+          best = d, expected = cb.project(X).uv;
+      good += (m.b - expected).norm() <= 2.0;
+    }
+    return good;
+  }
+};
+
+}  // namespace
+
 TEST_CASE("Geometric matcher on an exact scene: matches on the true point", "[match][geometric]") {
-  // Two 3D curves, seen from LAO 30 / RAO 30; the matcher must put each b within 1.5 px of the
-  // projection of the 3D point whose A projection is a.
-  const int size = 128;
-  const gimm::Camerad ca = carm_camera(30, 10, size), cb = carm_camera(-30, -5, size);
-  std::vector<Eigen::Vector3d> c1, c2;
-  for (int k = 0; k <= 20; ++k) {
-    const double t = k / 20.0;
-    c1.emplace_back(-40 + 80 * t, 15 * std::sin(3 * t), 10 * t - 20);
-    c2.emplace_back(10 * std::cos(2 * t) - 20, -35 + 70 * t, 25 * t);
-  }
-  gimm::Image<std::uint8_t> ma = draw_curve(ca, c1, 1), mb = draw_curve(cb, c1, 1);
-  const auto ma2 = draw_curve(ca, c2, 1), mb2 = draw_curve(cb, c2, 1);
-  for (std::size_t i = 0; i < ma.size(); ++i) {
-    ma.data()[i] |= ma2.data()[i];
-    mb.data()[i] |= mb2.data()[i];
-  }
-  gimm::GeometricOptions o;
-  const auto iso = gimm::pair_isocentre(ca, cb);
-  CHECK(iso.norm() < 1e-6);
-  const gimm::VesselView va = gimm::vessel_view(nullptr, &ma, ca, iso, o);
-  const gimm::VesselView vb = gimm::vessel_view(nullptr, &mb, cb, iso, o);
-  const auto matches = gimm::geometric_matches(va, vb, o);
+  // The matcher must put each b within 2 px of the projection of the 3D point whose A
+  // projection is a, and on a's epipolar line.
+  const TwoCurveScene scene;
+  CHECK(gimm::pair_isocentre(scene.ca, scene.cb).norm() < 1e-6);
+  const gimm::GeometricOptions o;
+  const auto matches = scene.match(o);
   INFO("matches " << matches.size());
   REQUIRE(matches.size() >= 20);
-  // The truth for a: the 3D curve point nearest to the triangulated one, projected into B.
-  std::vector<Eigen::Vector3d> dense;
-  for (const auto* curve : {&c1, &c2})
-    for (std::size_t k = 0; k + 1 < curve->size(); ++k)
-      for (int s = 0; s < 100; ++s)
-        dense.push_back((*curve)[k] + ((*curve)[k + 1] - (*curve)[k]) * (s / 100.0));
-  int good = 0;
-  for (const auto& m : matches) {
-    double best = 1e300;
-    Eigen::Vector2d expected = Eigen::Vector2d::Zero();
-    for (const auto& X : dense)
-      if (const double d = (ca.project(X).uv - m.a).norm(); d < best)
-        best = d, expected = cb.project(X).uv;
-    good += (m.b - expected).norm() <= 2.0;
+  for (const auto& m : matches)
     CHECK(gimm::point_line_distance<double>(
-              gimm::fundamental_from_cameras(ca, cb) * m.a.homogeneous(), m.b) <=
+              gimm::fundamental_from_cameras(scene.ca, scene.cb) * m.a.homogeneous(), m.b) <=
           o.epipolar_tolerance_px);
+  CHECK(scene.on_truth(matches) >= 0.9 * double(matches.size()));
+}
+
+TEST_CASE("Geometric matcher: the ordering term along a B chain", "[match][geometric]") {
+  using gimm::detail::Candidate;
+  using gimm::detail::ordering_cost;
+  const auto on = [](int chain, double along) {
+    Candidate c;
+    c.chain = chain;
+    c.along = along;
+    return c;
+  };
+  const double w = 2.5;
+  // Walking forwards: moving on is free, going back costs w, standing still (foreshortening)
+  // is free. Flipped direction conventions would swap these.
+  CHECK(ordering_cost(on(3, 10), true, on(3, 12.5), true, w) == 0.0);
+  CHECK(ordering_cost(on(3, 10), true, on(3, 7), true, w) == w);
+  CHECK(ordering_cost(on(3, 10), true, on(3, 10.3), true, w) == 0.0);
+  CHECK(ordering_cost(on(3, 10), true, on(3, 9.7), true, w) == 0.0);
+  // Walking backwards: the mirror image.
+  CHECK(ordering_cost(on(3, 10), false, on(3, 7), false, w) == 0.0);
+  CHECK(ordering_cost(on(3, 10), false, on(3, 12.5), false, w) == w);
+  // Turning round on one chain costs w; on a new chain any direction is free.
+  CHECK(ordering_cost(on(3, 10), true, on(3, 7), false, w) == w);
+  CHECK(ordering_cost(on(3, 10), true, on(4, 7), false, w) == 0.0);
+  CHECK(ordering_cost(on(3, 10), false, on(4, 70), true, w) == 0.0);
+
+  // With the term on, the exact scene's matches stay on the truth; bad costs are refused.
+  const TwoCurveScene scene;
+  for (const double order : {1.0, 5.0}) {
+    gimm::GeometricOptions o;
+    o.w_order = order;
+    const auto matches = scene.match(o);
+    INFO("order cost " << order << ", " << matches.size() << " matches");
+    REQUIRE(matches.size() >= 10);
+    CHECK(scene.on_truth(matches) >= 0.9 * double(matches.size()));
   }
-  INFO("good " << good);
-  CHECK(good >= 0.9 * double(matches.size()));
+  gimm::GeometricOptions bad;
+  for (const double order : {-1.0, std::nan(""), HUGE_VAL}) {
+    bad.w_order = order;
+    CHECK_THROWS_WITH(scene.match(bad), Catch::Contains("ordering cost must be finite and >= 0"));
+  }
 }
 
 TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {

@@ -17,7 +17,10 @@
 ///                (no match: no_match_cost)
 ///      pairwise  w_step log(|X_i - X_{i-1}| / e)^2, e = the A step back-projected to the depth
 ///                of X (a vessel foreshortened in A has a longer 3D step: log-symmetric, mild),
-///                + w_switch when the two candidates lie on different B chains;
+///                + w_switch when the two candidates lie on different B chains,
+///                + w_order when they lie on one B chain and the second goes back along it
+///                (each candidate is two states, walking its chain forwards or backwards, so
+///                ordering stays a first-order term; turning round costs w_order too);
 ///                0 next to "no match" (a gap breaks continuity, which costs no_match_cost).
 ///    Min-marginals (forward + backward) give each sample's best state and its confidence: the
 ///    margin between the best state and the best state that puts b elsewhere (> 2 px away) or
@@ -58,6 +61,11 @@ struct GeometricOptions {
   // the tuning set it cost 0.03 in Prec@3px.
   double no_match_cost = 10.0;
   double w_epipolar = 1.0, w_radius = 1.0, w_intensity = 0.0, w_step = 1.0, w_switch = 0.5;
+  /// Ordering along a B chain: consecutive samples of an A branch that stay on one B chain move
+  /// along it in one direction; going back, or turning round, costs this. 0 (default): no
+  /// ordering term. On the tuning set it did not pay (docs/geometric-matcher.md): the 3D step
+  /// term already keeps the walk on course, and the states double (4x the DP's work).
+  double w_order = 0.0;
   double min_confidence = 0.5;  ///< matches with a smaller margin are not reported
   /// Candidates triangulating farther than this from the isocentre (where the two principal
   /// axes meet: the C-arm centres the heart) are not considered; 0 = no limit. Ribs, spine and
@@ -98,6 +106,7 @@ struct Candidate {
   Eigen::Vector2d b;
   Eigen::Vector3d world;
   int chain = -1;
+  double along = 0;  ///< position along the B chain, in chain points (sub-point at crossings)
   double unary = 0;
   double px_per_mm = 1;  ///< detector pixels per mm of the source view at `world`
 };
@@ -154,6 +163,17 @@ class PointGrid {
 };
 
 /// Points every `step` pixels of arc length along a chain (the first point included).
+/// The ordering term between consecutive samples' candidates p then c, each walking its B chain
+/// forwards or backwards: `w` when both are on one chain and c turns round or goes back along it
+/// (more than half a chain point: a foreshortened stretch may stand still); else 0.
+inline double ordering_cost(const Candidate& p, bool p_forwards, const Candidate& c,
+                            bool c_forwards, double w) {
+  if (p.chain != c.chain) return 0.0;  // a new chain: any direction
+  const double move = c.along - p.along;
+  const bool back = c_forwards ? move < -0.5 : move > 0.5;
+  return c_forwards != p_forwards || back ? w : 0.0;
+}
+
 inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double step) {
   std::vector<std::size_t> out{0};
   double since = 0;
@@ -228,11 +248,11 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     if (!(n > 0) || !l.allFinite()) return cands;
     l /= n;
     const Ray<double> ray_a = from.camera.ray(a.x(), a.y());
-    const auto add = [&](const Eigen::Vector2d& b, double rb, double d, int chain) {
+    const auto add = [&](const Eigen::Vector2d& b, double rb, double d, int chain, double along) {
       const Ray<double> ray_b = to.camera.ray(b.x(), b.y());
       const auto X = two_ray_midpoint(ray_a, ray_b);
       if (!X || (o.heart_radius_mm > 0 && (*X - isocentre).norm() > o.heart_radius_mm)) return;
-      detail::Candidate c{b, *X, chain, 0, detail::pixels_per_mm(from.camera, *X)};
+      detail::Candidate c{b, *X, chain, along, 0, detail::pixels_per_mm(from.camera, *X)};
       c.unary = o.w_epipolar * (d / tol) * (d / tol) +
                 o.w_radius * std::abs(ra - rb) / std::max({ra, rb, 1.0});
       if (with_intensity) c.unary += o.w_intensity * std::abs(ia - detail::bilinear(*to.image, b));
@@ -251,7 +271,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
           const double t = d[j] / (d[j] - d[j + 1]);
           add(chain.points[j] + t * (chain.points[j + 1] - chain.points[j]),
               chain.radius_px[j] + t * (chain.radius_px[j + 1] - chain.radius_px[j]), 0.0,
-              static_cast<int>(k));
+              static_cast<int>(k), static_cast<double>(j) + t);
           continue;
         }
         // A near miss: a local minimum of |d| within tolerance, with no crossing beside it.
@@ -261,7 +281,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
         const bool local_min =
             (j == 0 || std::abs(d[j - 1]) > ad) && (j + 1 == m || std::abs(d[j + 1]) >= ad);
         if (local_min && !crossing_before)
-          add(chain.points[j], chain.radius_px[j], ad, static_cast<int>(k));
+          add(chain.points[j], chain.radius_px[j], ad, static_cast<int>(k), static_cast<double>(j));
       }
     }
     return cands;
@@ -277,31 +297,37 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       cand[i] = candidates_of(a, branch.radius_px[idx[i]],
                               with_intensity ? detail::bilinear(*from.image, a) : 0.0);
     }
-    // State s of sample i: 0 = no match, s >= 1 = candidate s - 1.
+    // State s of sample i: 0 = no match; s >= 1 = candidate (s - 1) / 2 walked along its B chain
+    // forwards (s odd) or backwards (s even), so the ordering term stays first-order.
+    const std::size_t dirs = o.w_order > 0 ? 2 : 1;
+    const auto candidate = [&](std::size_t s) { return (s - 1) / dirs; };
+    const auto forwards = [&](std::size_t s) { return dirs == 1 || (s - 1) % 2 == 0; };
     const auto pair_cost = [&](std::size_t i, std::size_t s_prev, std::size_t s) {
       if (s_prev == 0 || s == 0) return 0.0;
-      const detail::Candidate &p = cand[i - 1][s_prev - 1], &c = cand[i][s - 1];
+      const detail::Candidate &p = cand[i - 1][candidate(s_prev)], &c = cand[i][candidate(s)];
       const double step_px = (branch.points[idx[i]] - branch.points[idx[i - 1]]).norm();
       const double expected = step_px / c.px_per_mm;
       const double ratio = std::max((c.world - p.world).norm(), 1e-3) / std::max(expected, 1e-3);
       const double lr = std::log(ratio);
-      return o.w_step * lr * lr + (p.chain != c.chain ? o.w_switch : 0.0);
+      return o.w_step * lr * lr + (p.chain != c.chain ? o.w_switch : 0.0) +
+             (dirs == 2 ? detail::ordering_cost(p, forwards(s_prev), c, forwards(s), o.w_order)
+                        : 0.0);
     };
     const auto unary = [&](std::size_t i, std::size_t s) {
-      return s == 0 ? o.no_match_cost : cand[i][s - 1].unary;
+      return s == 0 ? o.no_match_cost : cand[i][candidate(s)].unary;
     };
     std::vector<std::size_t> states(n);
-    for (std::size_t i = 0; i < n; ++i) states[i] = cand[i].size() + 1;
+    for (std::size_t i = 0; i < n; ++i) states[i] = dirs * cand[i].size() + 1;
     const std::vector<std::vector<double>> marginal = chain_min_marginals(states, unary, pair_cost);
     for (std::size_t i = 0; i < n; ++i) {
       std::size_t best = 0;
-      for (std::size_t s = 1; s <= cand[i].size(); ++s)
+      for (std::size_t s = 1; s < states[i]; ++s)
         if (marginal[i][s] < marginal[i][best]) best = s;
       if (best == 0) continue;
-      const detail::Candidate& c = cand[i][best - 1];
+      const detail::Candidate& c = cand[i][candidate(best)];
       double rival = marginal[i][0];
-      for (std::size_t s = 1; s <= cand[i].size(); ++s)
-        if ((cand[i][s - 1].b - c.b).norm() > 2.0) rival = std::min(rival, marginal[i][s]);
+      for (std::size_t s = 1; s < states[i]; ++s)
+        if ((cand[i][candidate(s)].b - c.b).norm() > 2.0) rival = std::min(rival, marginal[i][s]);
       GeometricMatch m;
       m.a = branch.points[idx[i]];
       m.b = c.b;
@@ -347,6 +373,8 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
                  o.consistency_px > 0,
              "geometric matcher: sample_px, epipolar_tolerance_px and consistency_px must be > "
              "0 and no_match_cost >= 0");
+  GIMM_CHECK(std::isfinite(o.w_order) && o.w_order >= 0,
+             "geometric matcher: the ordering cost must be finite and >= 0, got " << o.w_order);
   const Eigen::Matrix3d F = fundamental_from_cameras(a.camera, b.camera);
   const Eigen::Vector3d iso = pair_isocentre(a.camera, b.camera);
   const Eigen::Matrix3d Ft = F.transpose();
