@@ -165,6 +165,8 @@ def triangulate(cameras: Sequence[_CameraLike], pixels: _Array,
 
 def read_volume(path: _Path, dtype: Literal["float32", "int16", "uint8"] = "float32"
                 ) -> Tuple[np.ndarray, Geometry]: ...
+def read_nifti(path: _Path, dtype: Literal["float32", "int16", "uint8"] = "float32"
+               ) -> Tuple[np.ndarray, Geometry]: ...
 class Volume:
     """A volume and its geometry, read in place of the caller's array when its layout is gimm's
     (float32, or uint8/bool for a mask, Fortran order, writeable); else one converted copy."""

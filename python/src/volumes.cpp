@@ -59,12 +59,13 @@ std::optional<CoronarySystem> optional_system(const py::object& system) {
   return parse_coronary_system(system.cast<std::string>());
 }
 
+/// read_volume (any format, by the name) or read_nifti (NIfTI only) as (array, geometry).
 template <class T>
-py::tuple read_as(const std::string& path) {
+py::tuple read_as(const std::string& path, bool nifti_only) {
   Volume<T> v;
   {
     py::gil_scoped_release release;
-    v = read_volume<T>(path);
+    v = nifti_only ? read_nifti<T>(path) : read_volume<T>(path);
   }
   py::dict geometry = geometry_dict(v.geometry());
   return py::make_tuple(adopt_volume(std::move(v)), geometry);
@@ -197,16 +198,21 @@ an array is read the same way at each call.)doc")
       });
 
   // ---- files -------------------------------------------------------------------------------
+  const auto reader = [](const char* name, bool nifti_only) {
+    return [name, nifti_only](const std::filesystem::path& path, const std::string& dtype) {
+      const std::string p = path.string();
+      if (dtype == "float32") return read_as<float>(p, nifti_only);
+      if (dtype == "int16") return read_as<std::int16_t>(p, nifti_only);
+      if (dtype == "uint8") return read_as<std::uint8_t>(p, nifti_only);
+      throw py::value_error(std::string(name) +
+                            ": dtype must be 'float32', 'int16' or 'uint8', got '" + dtype + "'");
+    };
+  };
+  m.def("read_nifti", reader("read_nifti", true), py::arg("path"), py::arg("dtype") = "float32",
+        "read_volume for NIfTI-1 files only (.nii, .nii.gz, whatever the name): (array, "
+        "geometry), the same arrays and errors.");
   m.def(
-      "read_volume",
-      [](const std::filesystem::path& path, const std::string& dtype) {
-        const std::string p = path.string();
-        if (dtype == "float32") return read_as<float>(p);
-        if (dtype == "int16") return read_as<std::int16_t>(p);
-        if (dtype == "uint8") return read_as<std::uint8_t>(p);
-        throw py::value_error("read_volume: dtype must be 'float32', 'int16' or 'uint8', got '" +
-                              dtype + "'");
-      },
+      "read_volume", reader("read_volume", false),
       py::arg("path"), py::arg("dtype") = "float32", R"doc(
 Reads a volume (NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr, MetaImage .mha/.mhd) into the LPS world.
 

@@ -65,6 +65,18 @@ class ZeroCopy(unittest.TestCase):
         as_float, _ = gimm.read_volume(path)
         self.assertEqual(as_float.dtype, np.float32)
         np.testing.assert_array_equal(as_float, p["hu"].astype(np.float32))
+        # read_nifti: the same for NIfTI, and refuses another format by what it reads.
+        nifti, nifti_geometry = gimm.read_nifti(path, dtype="int16")
+        self.assertTrue(is_capsule_view(nifti))
+        np.testing.assert_array_equal(nifti, hu)
+        np.testing.assert_array_equal(nifti_geometry["direction"], geometry["direction"])
+        nrrd = tmp_path("volumes", "not-nifti.nii")
+        with open(nrrd, "wb") as f:
+            f.write(b"NRRD0004\n" + bytes(400))
+        with self.assertRaisesRegex(gimm.FormatError, "not-nifti.nii"):
+            gimm.read_nifti(nrrd)
+        with self.assertRaisesRegex(ValueError, "read_nifti: dtype must be"):
+            gimm.read_nifti(path, dtype="float64")
 
     def test_nifti_orientation_matches_nibabel(self):
         try:
