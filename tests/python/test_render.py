@@ -189,6 +189,14 @@ class RenderValues(unittest.TestCase):
         del hu
         self.assertEqual(v[10, 20, 30], 1234.5)
         np.testing.assert_array_equal(v.array, ref)
+        # sample(): trilinear in world mm as gimm's Volume samples it: a voxel centre gives the
+        # voxel, the midpoint of two neighbours along j their mean, outside the grid 0.
+        g = p["geometry"]
+        centre = lambda i, j, k: g["origin"] + g["direction"] @ (g["spacing"] * [i, j, k])
+        self.assertEqual(v.sample(centre(10, 20, 30)), 1234.5)
+        self.assertAlmostEqual(v.sample(centre(40, 50.5, 20)),
+                               (float(ref[40, 50, 20]) + float(ref[40, 51, 20])) / 2, places=4)
+        self.assertEqual(v.sample(centre(-5, 0, 0)), 0.0)
         # int16 CTs (as make_phantom and most CCTA files hold them) and masks, uint8 and bool,
         # in Fortran order are read in place too.
         ct16 = gimm.Volume(p["hu"], p["geometry"])
