@@ -207,13 +207,18 @@ class Volume {
   const T* begin() const { return data_; }
   const T* end() const { return data_ + size_; }
   /// The owned voxels as a vector (comparisons in tests, moving the buffer out); a view has none.
-  std::vector<T>& storage() { return owned_storage(); }
-  const std::vector<T>& storage() const { return const_cast<Volume*>(this)->owned_storage(); }
+  std::vector<T>& storage() {
+    check_owned();
+    return own_;
+  }
+  const std::vector<T>& storage() const {
+    check_owned();
+    return own_;
+  }
 
  private:
-  std::vector<T>& owned_storage() {
+  void check_owned() const {
     GIMM_CHECK(owns_data(), "Volume: storage() of a view (it owns no vector; use begin()/end())");
-    return own_;
   }
 
   VolumeGeometry geometry_;

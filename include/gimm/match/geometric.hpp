@@ -162,7 +162,6 @@ class PointGrid {
   std::unordered_map<std::int64_t, std::vector<std::size_t>> cells_;
 };
 
-/// Points every `step` pixels of arc length along a chain (the first point included).
 /// The ordering term between consecutive samples' candidates p then c, each walking its B chain
 /// forwards or backwards: `w` when both are on one chain and c turns round or goes back along it
 /// (more than half a chain point: a foreshortened stretch may stand still); else 0.
@@ -174,6 +173,7 @@ inline double ordering_cost(const Candidate& p, bool p_forwards, const Candidate
   return c_forwards != p_forwards || back ? w : 0.0;
 }
 
+/// Points every `step` pixels of arc length along a chain (the first point included).
 inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double step) {
   std::vector<std::size_t> out{0};
   double since = 0;
@@ -310,8 +310,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       const double ratio = std::max((c.world - p.world).norm(), 1e-3) / std::max(expected, 1e-3);
       const double lr = std::log(ratio);
       return o.w_step * lr * lr + (p.chain != c.chain ? o.w_switch : 0.0) +
-             (dirs == 2 ? detail::ordering_cost(p, forwards(s_prev), c, forwards(s), o.w_order)
-                        : 0.0);
+             detail::ordering_cost(p, forwards(s_prev), c, forwards(s), o.w_order);
     };
     const auto unary = [&](std::size_t i, std::size_t s) {
       return s == 0 ? o.no_match_cost : cand[i][candidate(s)].unary;

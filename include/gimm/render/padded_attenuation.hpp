@@ -8,6 +8,7 @@
 /// contrast in a coronary cut by the scan's coverage does not carry on for centimetres beyond.
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/core/volume.hpp"
@@ -24,7 +25,7 @@ struct PaddedAttenuation {
 /// From a volume that already is attenuation (mm^-1): its edge slices carry on. The result owns
 /// its voxels: a view (Volume::view) is copied, as the renderer outlives its caller's buffer.
 inline PaddedAttenuation padded_attenuation(Volume<float> mu, double pad_mm, Projector projector) {
-  if (!mu.owns_data()) mu = Volume<float>(static_cast<const Volume<float>&>(mu));
+  if (!mu.owns_data()) mu = Volume<float>(std::as_const(mu));  // the copy owns its voxels
   if (projector == Projector::siddon) {
     AxialPads<float> pads = axial_pads(mu, pad_mm);
     return {std::move(mu), std::move(pads)};
