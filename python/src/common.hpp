@@ -323,6 +323,14 @@ VolumeInput<T> volume_in(const py::handle& obj, VolumeGeometry geometry, Accept 
   return in;
 }
 
+/// The dtype gimm keeps an array's volume as when nothing says otherwise: uint8 for a mask (bool
+/// or uint8), int16 for an int16 CT, float32 for everything else.
+inline std::string natural_dtype(const py::array& a) {
+  const py::dtype t = a.dtype();
+  if (t.is(py::dtype::of<bool>()) || t.is(py::dtype::of<std::uint8_t>())) return "uint8";
+  return t.is(py::dtype::of<std::int16_t>()) ? "int16" : "float32";
+}
+
 inline const char* dtype_name(const Volume<float>&) {
   return "float32";
 }

@@ -130,8 +130,7 @@ HuInput hu_arg(const py::handle& obj, const GeometryArgs& grid, const std::strin
     return volume_arg<float>(obj, grid, Accept::real, name);
   }
   const py::array a = checked_array(obj, 3, Accept::real, name);
-  if (a.dtype().is(py::dtype::of<std::int16_t>()))
-    return volume_arg<std::int16_t>(a, grid, Accept::real, name);
+  if (natural_dtype(a) == "int16") return volume_arg<std::int16_t>(a, grid, Accept::real, name);
   return volume_arg<float>(a, grid, Accept::real, name);
 }
 

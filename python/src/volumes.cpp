@@ -89,18 +89,19 @@ py::dict view_class_dict(const ViewClass& v) {
   return d;
 }
 
+/// natural_dtype of an array or tensor; "" for anything else (the reader then names what it got).
+std::string natural_dtype_of(const py::handle& obj) {
+  if (!py::isinstance<py::array>(obj) && !py::hasattr(obj, "__array__")) return "";
+  return natural_dtype(py::module_::import("numpy").attr("asarray")(obj));
+}
+
 /// gimm.Volume(array, geometry, ...): float32 unless dtype says uint8 or the array is a mask.
 PyVolume make_py_volume(const py::handle& array, const py::object& geometry,
                         const py::object& spacing, const py::object& origin,
                         const py::object& direction, const py::object& dtype) {
   const VolumeGeometry g = geometry_from(geometry, spacing, origin, direction);
   std::string kind = dtype.is_none() ? "" : py::str(dtype).cast<std::string>();
-  if (kind.empty() && (py::isinstance<py::array>(array) || py::hasattr(array, "__array__"))) {
-    const py::dtype t = py::module_::import("numpy").attr("asarray")(array).attr("dtype");
-    kind = t.is(py::dtype::of<bool>()) || t.is(py::dtype::of<std::uint8_t>()) ? "uint8"
-           : t.is(py::dtype::of<std::int16_t>())                              ? "int16"
-                                                                              : "float32";
-  }
+  if (kind.empty()) kind = natural_dtype_of(array);
   if (kind.empty() || kind == "float32")
     return PyVolume{volume_in<float>(array, g, Accept::real, "Volume")};
   if (kind == "int16") return PyVolume{volume_in<std::int16_t>(array, g, Accept::real, "Volume")};
@@ -211,9 +212,8 @@ an array is read the same way at each call.)doc")
   m.def("read_nifti", reader("read_nifti", true), py::arg("path"), py::arg("dtype") = "float32",
         "read_volume for NIfTI-1 files only (.nii, .nii.gz, whatever the name): (array, "
         "geometry), the same arrays and errors.");
-  m.def(
-      "read_volume", reader("read_volume", false),
-      py::arg("path"), py::arg("dtype") = "float32", R"doc(
+  m.def("read_volume", reader("read_volume", false), py::arg("path"), py::arg("dtype") = "float32",
+        R"doc(
 Reads a volume (NIfTI .nii/.nii.gz, NRRD .nrrd/.nhdr, MetaImage .mha/.mhd) into the LPS world.
 
 Returns (array, geometry): array (nx, ny, nz) indexed [i, j, k], Fortran order, of dtype
@@ -226,21 +226,16 @@ Raises gimm.IoError naming the file when it cannot be read, gimm.FormatError whe
       [](const std::filesystem::path& path, const py::handle& array, const py::object& geometry,
          const std::string& description) {
         const std::string p = path.string();
-        if (py::isinstance<PyVolume>(array)) {
-          const std::string kind = array.cast<const PyVolume&>().dtype();
-          if (kind == "int16")
-            return write_as<std::int16_t>(p, array, geometry, Accept::real, description);
-          if (kind == "uint8")
-            return write_as<std::uint8_t>(p, array, geometry, Accept::mask, description);
-          return write_as<float>(p, array, geometry, Accept::real, description);
-        }
-        const py::array a = checked_array(array, 3, Accept::real, "write_nifti: volume");
-        if (a.dtype().is(py::dtype::of<std::int16_t>()))
-          write_as<std::int16_t>(p, a, geometry, Accept::real, description);
-        else if (a.dtype().is(py::dtype::of<std::uint8_t>()) || a.dtype().is(py::dtype::of<bool>()))
-          write_as<std::uint8_t>(p, a, geometry, Accept::mask, description);
+        // A gimm.Volume keeps its dtype; an array its natural one (int16, uint8/bool, float32).
+        const std::string kind = py::isinstance<PyVolume>(array)
+                                     ? std::string(array.cast<const PyVolume&>().dtype())
+                                     : natural_dtype_of(array);
+        if (kind == "int16")
+          write_as<std::int16_t>(p, array, geometry, Accept::real, description);
+        else if (kind == "uint8")
+          write_as<std::uint8_t>(p, array, geometry, Accept::mask, description);
         else
-          write_as<float>(p, a, geometry, Accept::real, description);
+          write_as<float>(p, array, geometry, Accept::real, description);
       },
       py::arg("path"), py::arg("volume"), py::arg("geometry") = py::none(),
       py::arg("description") = "gimm",

@@ -77,6 +77,14 @@ class ZeroCopy(unittest.TestCase):
             gimm.read_nifti(nrrd)
         with self.assertRaisesRegex(ValueError, "read_nifti: dtype must be"):
             gimm.read_nifti(path, dtype="float64")
+        # A bool mask is written as uint8, and a gimm.Volume with its own geometry.
+        mask_path = tmp_path("volumes", "mask.nii.gz")
+        gimm.write_nifti(mask_path, lca().astype(bool), p["geometry"])
+        np.testing.assert_array_equal(gimm.read_nifti(mask_path, dtype="uint8")[0], lca())
+        gimm.write_nifti(mask_path, gimm.Volume(lca(), p["geometry"]))
+        back, back_geometry = gimm.read_nifti(mask_path, dtype="uint8")
+        np.testing.assert_array_equal(back, lca())
+        np.testing.assert_allclose(back_geometry["origin"], p["geometry"]["origin"], atol=1e-5)
 
     def test_nifti_orientation_matches_nibabel(self):
         try:
