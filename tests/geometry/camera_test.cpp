@@ -7,7 +7,7 @@
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/carm.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace camera_test {
 
 using namespace gimm;

@@ -9,7 +9,7 @@
 #include "gimm/geometry/gating.hpp"
 #include "scene.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace gating_test {
 
 using namespace gimm;

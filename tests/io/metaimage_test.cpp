@@ -9,7 +9,7 @@
 #include "gimm/io/nifti.hpp"
 #include "volume_fixtures.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace metaimage_test {
 
 namespace fs = std::filesystem;

@@ -7,7 +7,7 @@
 
 #include "gimm/io/nifti.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace nifti_test {
 
 namespace fs = std::filesystem;

@@ -8,7 +8,7 @@
 #include "gimm/io/nrrd.hpp"
 #include "volume_fixtures.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace nrrd_test {
 
 namespace fs = std::filesystem;

@@ -10,7 +10,7 @@
 #include "gimm/pipeline/dataset.hpp"
 #include "gimm/pipeline/reference_export.hpp"
 
-// Its own namespace: the room is compiled as one unity file (tests/CMakeLists.txt).
+// Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).
 namespace reference_export_test {
 
 namespace fs = std::filesystem;
