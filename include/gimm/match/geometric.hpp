@@ -230,15 +230,24 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
   const bool with_intensity = from.image && to.image && o.w_intensity > 0;
   const double tol = o.epipolar_tolerance_px;
   // Each target chain's bounding box: a line whose signed distance is beyond +-tol at all four
-  // corners cannot cross the chain or pass within tol of it, so the chain is skipped.
-  std::vector<Eigen::Matrix<double, 3, 4>> corners;
+  // corners cannot cross the chain or pass within tol of it, so the chain is skipped. The
+  // nearest and farthest corners follow from the signs of the line's normal: two products each.
+  struct Box {
+    double lo_x, lo_y, hi_x, hi_y;
+  };
+  std::vector<Box> boxes;
   for (const Branch2d& chain : to.graph.branches) {
     Eigen::Vector2d lo = chain.points.front(), hi = lo;
     for (const Eigen::Vector2d& p : chain.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    Eigen::Matrix<double, 3, 4> box;
-    box << lo.x(), hi.x(), lo.x(), hi.x(), lo.y(), lo.y(), hi.y(), hi.y(), 1, 1, 1, 1;
-    corners.push_back(box);
+    boxes.push_back({lo.x(), lo.y(), hi.x(), hi.y()});
   }
+  const auto beyond_tolerance = [tol](const Eigen::Vector3d& l, const Box& b) {
+    const double x_min = l.x() * (l.x() > 0 ? b.lo_x : b.hi_x),
+                 x_max = l.x() * (l.x() > 0 ? b.hi_x : b.lo_x);
+    const double y_min = l.y() * (l.y() > 0 ? b.lo_y : b.hi_y),
+                 y_max = l.y() * (l.y() > 0 ? b.hi_y : b.lo_y);
+    return x_min + y_min + l.z() > tol || x_max + y_max + l.z() < -tol;
+  };
   std::vector<double> d;  // signed distances of one chain's points to the current line
   // One candidate set per sample.
   const auto candidates_of = [&](const Eigen::Vector2d& a, double ra, double ia) {
@@ -259,8 +268,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       cands.push_back(c);
     };
     for (std::size_t k = 0; k < to.graph.branches.size(); ++k) {
-      const Eigen::RowVector4d at_corners = l.transpose() * corners[k];
-      if (at_corners.minCoeff() > tol || at_corners.maxCoeff() < -tol) continue;
+      if (beyond_tolerance(l, boxes[k])) continue;
       const Branch2d& chain = to.graph.branches[k];
       const std::size_t m = chain.points.size();
       d.resize(m);
