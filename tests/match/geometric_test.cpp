@@ -89,6 +89,60 @@ TEST_CASE("Chain DP min-marginals equal brute force", "[match][geometric]") {
   }
 }
 
+TEST_CASE("Line meetings: the blocked search equals the plain scan", "[match][geometric]") {
+  // Random 8-connected pixel walks (lengths around the 16-point block size included) against
+  // random lines and lines through pixel centres (signed distance exactly 0 at chain points).
+  std::mt19937 rng(21);
+  std::vector<gimm::Branch2d> chains;
+  for (const int length : {1, 2, 3, 15, 16, 17, 18, 31, 32, 33, 34, 47, 48, 49, 80, 200, 200}) {
+    gimm::Branch2d b;
+    Eigen::Vector2d p(double(rng() % 100), double(rng() % 100));
+    for (int j = 0; j < length; ++j) {
+      b.points.push_back(p);
+      b.radius_px.push_back(0.5 + (rng() % 40) / 10.0);
+      p += Eigen::Vector2d(double(int(rng() % 3) - 1), double(int(rng() % 3) - 1));
+    }
+    chains.push_back(b);
+  }
+  std::vector<gimm::detail::ChainBlocks> index;
+  for (const auto& c : chains) index.emplace_back(c.points);
+  std::uniform_real_distribution<double> angle(0, 2 * M_PI), offset(-20, 140);
+  std::vector<double> d;
+  std::vector<gimm::detail::LineMeeting> fast, plain;
+  std::size_t meetings = 0, exact_hits = 0, near_misses = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    Eigen::Vector3d l;
+    if (trial % 3 == 0) {  // through a chain point, along x, y or a diagonal
+      const auto& c = chains[rng() % chains.size()];
+      const Eigen::Vector2d p = c.points[rng() % c.points.size()];
+      const Eigen::Vector2d n = trial % 2 ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1);
+      l << n, -n.dot(p);
+    } else {
+      const double a = angle(rng);
+      l << std::cos(a), std::sin(a), -offset(rng);
+    }
+    for (const double tol : {0.5, 3.0}) {
+      gimm::detail::line_meetings(chains, &index, l, tol, d, fast);
+      gimm::detail::line_meetings(chains, nullptr, l, tol, d, plain);
+      REQUIRE(fast.size() == plain.size());
+      for (std::size_t i = 0; i < fast.size(); ++i) {
+        CHECK(fast[i].chain == plain[i].chain);
+        CHECK(fast[i].along == plain[i].along);
+        CHECK(fast[i].b == plain[i].b);
+        CHECK(fast[i].radius_px == plain[i].radius_px);
+        CHECK(fast[i].distance_px == plain[i].distance_px);
+        exact_hits += plain[i].along == std::floor(plain[i].along) && plain[i].distance_px == 0;
+        near_misses += plain[i].distance_px > 0;
+      }
+      meetings += plain.size();
+    }
+  }
+  // Not vacuous: many meetings, some on a chain point exactly, some near misses.
+  CHECK(meetings > 2000);
+  CHECK(exact_hits > 100);
+  CHECK(near_misses > 100);
+}
+
 TEST_CASE("Vesselness peaks on a tube's centre, at the scale of its radius", "[match][geometric]") {
   const double radius = 3.0, row = 32;  // rows 29..35: half-width 3.5 px
   const gimm::Image<float> im = bar_image(64, radius, row);

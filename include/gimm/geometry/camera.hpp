@@ -54,7 +54,7 @@ class Camera {
   /// Checks: K upper triangular with K(2,2) = 1 and nonzero focal entries; R a rotation;
   /// rows, cols > 0; all entries finite.
   Camera(ProjectionModel model, const Mat3& K, const Mat3& R, const Vec3& t, int rows, int cols)
-      : model_(model), K_(K), R_(R), t_(t), rows_(rows), cols_(cols) {
+      : model_(model), K_(K), K_inverse_(K.inverse()), R_(R), t_(t), rows_(rows), cols_(cols) {
     GIMM_CHECK(rows > 0 && cols > 0,
                "Camera: image size must be positive, got " << rows << " x " << cols);
     GIMM_CHECK(K.allFinite() && R.allFinite() && t.allFinite(),
@@ -129,15 +129,14 @@ class Camera {
   /// points from the source towards the detector.
   Ray<Scalar> ray(Scalar u, Scalar v) const {
     Ray<Scalar> r;
-    const Mat3 Kinv = K_.inverse();
     if (is_orthographic()) {
-      const Vec3 xy = Kinv * Vec3(u, v, 1);  // camera-frame x, y in mm (z ignored)
+      const Vec3 xy = K_inverse_ * Vec3(u, v, 1);  // camera-frame x, y in mm (z ignored)
       r.direction = principal_axis();
       r.origin = R_.transpose() * (Vec3(xy.x(), xy.y(), 0) - t_);
       return r;
     }
     r.origin = center();
-    r.direction = (R_.transpose() * (Kinv * Vec3(u, v, 1))).normalized();
+    r.direction = (R_.transpose() * (K_inverse_ * Vec3(u, v, 1))).normalized();
     return r;
   }
 
@@ -157,6 +156,7 @@ class Camera {
  private:
   ProjectionModel model_ = ProjectionModel::perspective;
   Mat3 K_ = Mat3::Identity();
+  Mat3 K_inverse_ = Mat3::Identity();  // kept: ray() is called per pixel and per candidate
   Mat3 R_ = Mat3::Identity();
   Vec3 t_ = Vec3::Zero();
   int rows_ = 1;
