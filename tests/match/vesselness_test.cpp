@@ -113,10 +113,14 @@ TEST_CASE("Fast vesselness agrees with the exact-kernel reference", "[match][ves
 
 TEST_CASE("Table-driven thinning equals the plain Zhang-Suen rule", "[match][vesselness]") {
   std::mt19937 rng(11);
-  for (int trial = 0; trial < 20; ++trial) {
-    // Random thick strokes and blobs, some touching the border.
-    gimm::Image<std::uint8_t> m(48, 40, 0);
-    std::uniform_int_distribution<int> row(-3, 50), col(-3, 42), half(0, 4);
+  for (int trial = 0; trial < 24; ++trial) {
+    // Random thick strokes and blobs, some touching the border; the last four large and thick
+    // (many sub-iterations, each changing a few pixels' neighbourhoods).
+    const bool large = trial >= 20;
+    const int rows = large ? 160 : 48, cols = large ? 150 : 40;
+    gimm::Image<std::uint8_t> m(rows, cols, 0);
+    std::uniform_int_distribution<int> row(-3, rows + 2), col(-3, cols + 2),
+        half(0, large ? 12 : 4);
     for (int k = 0; k < 6; ++k) {
       const int r0 = row(rng), c0 = col(rng), r1 = row(rng), c1 = col(rng), h = half(rng);
       for (int s = 0; s <= 60; ++s) {

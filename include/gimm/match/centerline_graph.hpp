@@ -68,14 +68,16 @@ constexpr int kRingOffsetOf(int k, int stride) {
 constexpr int kMaxRadiusPx = 32;
 
 /// Distance from (r, c) to the nearest zero pixel of `m` (outside the image counts as zero),
-/// searched in growing square rings; kMaxRadiusPx when none is nearer.
+/// searched in growing square rings; kMaxRadiusPx when none is nearer. Squared distances are
+/// integers: compared exactly, one square root at the end.
 inline double distance_to_zero(const Image<std::uint8_t>& m, int r, int c) {
-  double best = kMaxRadiusPx;
-  for (int ring = 1; ring <= kMaxRadiusPx && ring < best + 1; ++ring)
+  int best2 = kMaxRadiusPx * kMaxRadiusPx;
+  // Ring `ring` holds distances >= ring, so the search ends once (ring - 1)^2 >= best2.
+  for (int ring = 1; ring <= kMaxRadiusPx && (ring - 1) * (ring - 1) < best2; ++ring)
     for (int dr = -ring; dr <= ring; ++dr)
       for (int dc = -ring; dc <= ring; dc += (std::abs(dr) == ring ? 1 : 2 * ring))
-        if (!lit(m, r + dr, c + dc)) best = std::min(best, std::hypot(double(dr), double(dc)));
-  return best;
+        if (!lit(m, r + dr, c + dc)) best2 = std::min(best2, dr * dr + dc * dc);
+  return std::sqrt(static_cast<double>(best2));
 }
 
 }  // namespace detail
@@ -108,41 +110,58 @@ inline const std::array<std::array<bool, 256>, 2>& zhang_suen_table() {
 
 /// One-pixel-wide skeleton of a binary mask (nonzero = foreground), Zhang-Suen. The mask is
 /// copied into a frame one pixel wider (no bounds checks), and each pixel's neighbourhood is
-/// looked up in a 256-entry table.
+/// looked up in a 256-entry table. A sub-iteration looks only at the pixels whose neighbourhood
+/// changed since that sub-iteration last kept them (at first, all): the others would be kept
+/// again. Each sub-iteration still removes what the plain rule removes, from the same state.
 template <class T>
 Image<std::uint8_t> thin_mask(const Image<T>& mask) {
   const int rows = mask.rows(), cols = mask.cols(), stride = cols + 2;
   std::vector<std::uint8_t> m(static_cast<std::size_t>(rows + 2) * stride, 0);
-  // Only foreground pixels can be removed: visit those (a few percent of an angiogram).
-  std::vector<int> alive, remove;
+  // to_check[p]: the pixels sub-iteration p has to look at; `queued` bit p marks them.
+  std::array<std::vector<int>, 2> to_check;
+  std::vector<std::uint8_t> queued(m.size(), 0);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       if (mask(r, c) != T(0)) {
         const int i = (r + 1) * stride + c + 1;
         m[static_cast<std::size_t>(i)] = 1;
-        alive.push_back(i);
+        queued[static_cast<std::size_t>(i)] = 3;
+        to_check[0].push_back(i);
       }
+  to_check[1] = to_check[0];
   std::array<int, 8> offset{};  // kRing as index offsets in the framed buffer
   for (int k = 0; k < 8; ++k) offset[k] = detail::kRingOffsetOf(k, stride);
   const auto& table = detail::zhang_suen_table();
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (int pass = 0; pass < 2; ++pass) {
-      remove.clear();
-      for (int i : alive) {
-        int code = 0;
-        for (int k = 0; k < 8; ++k) code |= m[static_cast<std::size_t>(i + offset[k])] << k;
-        if (table[pass][code]) remove.push_back(i);
-      }
-      for (int i : remove) m[static_cast<std::size_t>(i)] = 0;
-      changed = changed || !remove.empty();
-      alive.erase(std::remove_if(alive.begin(), alive.end(),
-                                 [&](int i) { return !m[static_cast<std::size_t>(i)]; }),
-                  alive.end());
+  std::vector<int> checking, remove;
+  for (int pass = 0; !to_check[0].empty() || !to_check[1].empty(); pass = 1 - pass) {
+    checking.swap(to_check[pass]);
+    to_check[pass].clear();
+    remove.clear();
+    const auto bit = static_cast<std::uint8_t>(1 << pass);
+    for (int i : checking) {
+      const auto at = static_cast<std::size_t>(i);
+      queued[at] &= static_cast<std::uint8_t>(~bit);
+      if (!m[at]) continue;  // removed since it was queued
+      int code = 0;
+      for (int k = 0; k < 8; ++k) code |= m[static_cast<std::size_t>(i + offset[k])] << k;
+      if (table[pass][code]) remove.push_back(i);
     }
+    for (int i : remove) m[static_cast<std::size_t>(i)] = 0;
+    for (int i : remove)  // their neighbours changed: both sub-iterations look again
+      for (int k = 0; k < 8; ++k) {
+        const auto j = static_cast<std::size_t>(i + offset[k]);
+        if (!m[j]) continue;
+        for (int p = 0; p < 2; ++p)
+          if (!(queued[j] & (1 << p))) {
+            queued[j] |= static_cast<std::uint8_t>(1 << p);
+            to_check[p].push_back(static_cast<int>(j));
+          }
+      }
   }
   Image<std::uint8_t> out(rows, cols, 0);
-  for (int i : alive) out.data()[(i / stride - 1) * cols + i % stride - 1] = 1;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      out(r, c) = m[static_cast<std::size_t>((r + 1) * stride + c + 1)];
   return out;
 }
 
