@@ -1,10 +1,11 @@
 // The fast paths of the vessel segmentation against their slow references: the float,
 // vectorised vesselness (half resolution for wide scales) against the double-precision kernels,
-// the table-driven thinning against the plain Zhang-Suen rule, and the two-thread geometric
-// matcher against one thread.
+// the vectorised Hessian eigenvalues against the 2x2 rule, the table-driven thinning against the
+// plain Zhang-Suen rule, and the two-thread geometric matcher against one thread.
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "gimm/geometry/carm.hpp"
@@ -109,6 +110,41 @@ TEST_CASE("Fast vesselness agrees with the exact-kernel reference", "[match][ves
   bad.half_resolution_from_px = 0.6;
   CHECK_THROWS_WITH(gimm::vesselness(im, bad),
                     Catch::Contains("half_resolution_from_px") && Catch::Contains("0.6"));
+}
+
+TEST_CASE("Vectorised Hessian eigenvalues agree with the per-pixel 2x2 rule",
+          "[match][vesselness]") {
+  // Random Hessians, and the cases where the ordering by magnitude turns: trace +-0, a zero
+  // root (isotropic), a zero off-diagonal.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+  const int rows = 37, cols = 29;  // not a multiple of the packet size
+  gimm::Image<float> xx(rows, cols), xy(rows, cols), yy(rows, cols);
+  for (std::size_t i = 0; i < xx.size(); ++i) {
+    xx.data()[i] = u(rng), xy.data()[i] = u(rng), yy.data()[i] = u(rng);
+    if (i % 7 == 0) yy.data()[i] = -xx.data()[i];                    // trace 0
+    if (i % 11 == 0) yy.data()[i] = xx.data()[i], xy.data()[i] = 0;  // isotropic
+    if (i % 13 == 0) xx.data()[i] = -0.0f, yy.data()[i] = -0.0f, xy.data()[i] = u(rng);  // trace -0
+    if (i % 17 == 0) xy.data()[i] = 0;
+  }
+  for (const double s : {1.0, 1.7}) {
+    const auto e = gimm::detail::scale_eigen(xx, xy, yy, s);
+    const float n = static_cast<float>(s * s);
+    int swapped = 0;
+    for (std::size_t i = 0; i < xx.size(); ++i) {
+      float l1 = 0, l2 = 0;
+      gimm::detail::eigen_2x2(n * xx.data()[i], n * xy.data()[i], n * yy.data()[i], l1, l2);
+      INFO("pixel " << i << " scale " << s);
+      // Eigen's packet square root is a refined reciprocal estimate: a few ulp of the larger
+      // magnitude, not bit-exact.
+      const float ulps = 4 * std::numeric_limits<float>::epsilon() * std::abs(l2);
+      CHECK(std::abs(e.l1.data()[i] - l1) <= ulps);
+      CHECK(std::abs(e.l2.data()[i] - l2) <= ulps);
+      CHECK(std::abs(e.l1.data()[i]) <= std::abs(e.l2.data()[i]));
+      swapped += 0.5f * (n * xx.data()[i] + n * yy.data()[i]) < 0;
+    }
+    CHECK(swapped > 100);  // both orderings exercised
+  }
 }
 
 TEST_CASE("Table-driven thinning equals the plain Zhang-Suen rule", "[match][vesselness]") {

@@ -298,29 +298,40 @@ inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double ste
 
 /// Min-marginals of a chain: cost[i][s] = the least total cost of a state sequence that has state
 /// s at position i, where a sequence costs sum_i unary(i, s_i) + sum_{i>0} pair(i, s_{i-1}, s_i).
-/// Forward (alpha) and backward (beta) passes, O(n S^2).
+/// Forward (alpha) and backward (beta) passes, O(n S^2); each pair cost is evaluated once and
+/// kept for both passes.
 template <class Unary, class Pair>
 std::vector<std::vector<double>> chain_min_marginals(const std::vector<std::size_t>& states,
                                                      const Unary& unary, const Pair& pair) {
   const std::size_t n = states.size();
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<std::vector<double>> alpha(n), beta(n);
+  // costs[i][sp * states[i] + s] = pair(i, sp, s)
+  std::vector<std::vector<double>> costs(n), alpha(n), beta(n);
+  for (std::size_t i = 1; i < n; ++i) {
+    costs[i].resize(states[i - 1] * states[i]);
+    for (std::size_t sp = 0; sp < states[i - 1]; ++sp)
+      for (std::size_t s = 0; s < states[i]; ++s) costs[i][sp * states[i] + s] = pair(i, sp, s);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     alpha[i].assign(states[i], inf);
     for (std::size_t s = 0; s < states[i]; ++s) {
       double best = i == 0 ? 0.0 : inf;
       if (i > 0)
         for (std::size_t sp = 0; sp < states[i - 1]; ++sp)
-          best = std::min(best, alpha[i - 1][sp] + pair(i, sp, s));
+          best = std::min(best, alpha[i - 1][sp] + costs[i][sp * states[i] + s]);
       alpha[i][s] = best + unary(i, s);
     }
   }
+  std::vector<double> ahead;  // unary(i + 1, sn) + beta[i + 1][sn]
   for (std::size_t i = n; i-- > 0;) {
     beta[i].assign(states[i], i + 1 == n ? 0.0 : inf);
     if (i + 1 == n) continue;
+    ahead.resize(states[i + 1]);
+    for (std::size_t sn = 0; sn < states[i + 1]; ++sn) ahead[sn] = unary(i + 1, sn);
     for (std::size_t s = 0; s < states[i]; ++s)
       for (std::size_t sn = 0; sn < states[i + 1]; ++sn)
-        beta[i][s] = std::min(beta[i][s], pair(i + 1, s, sn) + unary(i + 1, sn) + beta[i + 1][sn]);
+        beta[i][s] = std::min(beta[i][s],
+                              costs[i + 1][s * states[i + 1] + sn] + ahead[sn] + beta[i + 1][sn]);
   }
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t s = 0; s < states[i]; ++s) alpha[i][s] += beta[i][s];
@@ -378,11 +389,13 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     const std::size_t dirs = o.w_order > 0 ? 2 : 1;
     const auto candidate = [&](std::size_t s) { return (s - 1) / dirs; };
     const auto forwards = [&](std::size_t s) { return dirs == 1 || (s - 1) % 2 == 0; };
+    std::vector<double> step_px(n, 0.0);  // A step into sample i
+    for (std::size_t i = 1; i < n; ++i)
+      step_px[i] = (branch.points[idx[i]] - branch.points[idx[i - 1]]).norm();
     const auto pair_cost = [&](std::size_t i, std::size_t s_prev, std::size_t s) {
       if (s_prev == 0 || s == 0) return 0.0;
       const detail::Candidate &p = cand[i - 1][candidate(s_prev)], &c = cand[i][candidate(s)];
-      const double step_px = (branch.points[idx[i]] - branch.points[idx[i - 1]]).norm();
-      const double expected = step_px / c.px_per_mm;
+      const double expected = step_px[i] / c.px_per_mm;
       const double ratio = std::max((c.world - p.world).norm(), 1e-3) / std::max(expected, 1e-3);
       const double lr = std::log(ratio);
       return o.w_step * lr * lr + (p.chain != c.chain ? o.w_switch : 0.0) +
