@@ -1,6 +1,7 @@
 // The geometric matcher's parts: the chain DP against brute force, vesselness at the centre and
 // scale of a tube, 2D centerlines, and the matcher on an exact synthetic scene and on degenerate
 // input (no vessels, a camera for another image size, epipolar lines along a vessel).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
@@ -8,6 +9,7 @@
 #include <tuple>
 
 #include "gimm/geometry/carm.hpp"
+#include "gimm/geometry/fundamental.hpp"
 #include "gimm/match/geometric.hpp"
 
 namespace {
@@ -89,10 +91,10 @@ TEST_CASE("Chain DP min-marginals equal brute force", "[match][geometric]") {
   }
 }
 
-TEST_CASE("Line meetings: the blocked search equals the plain scan", "[match][geometric]") {
-  // Random 8-connected pixel walks (lengths around the 16-point block size included) against
-  // random lines and lines through pixel centres (signed distance exactly 0 at chain points).
-  std::mt19937 rng(21);
+namespace {
+
+/// Random 8-connected pixel walks, lengths around the 16-point block size included.
+std::vector<gimm::Branch2d> random_walks(std::mt19937& rng) {
   std::vector<gimm::Branch2d> chains;
   for (const int length : {1, 2, 3, 15, 16, 17, 18, 31, 32, 33, 34, 47, 48, 49, 80, 200, 200}) {
     gimm::Branch2d b;
@@ -104,12 +106,43 @@ TEST_CASE("Line meetings: the blocked search equals the plain scan", "[match][ge
     }
     chains.push_back(b);
   }
-  std::vector<gimm::detail::ChainBlocks> index;
-  for (const auto& c : chains) index.emplace_back(c.points);
-  std::uniform_real_distribution<double> angle(0, 2 * M_PI), offset(-20, 140);
-  std::vector<double> d;
-  std::vector<gimm::detail::LineMeeting> fast, plain;
+  return chains;
+}
+
+struct MeetingTally {
   std::size_t meetings = 0, exact_hits = 0, near_misses = 0;
+};
+
+/// line_meetings() with `index` and without: the same meetings, field by field.
+void check_same_meetings(const std::vector<gimm::Branch2d>& chains, const gimm::ChainIndex& index,
+                         const Eigen::Vector3d& l, double tol, MeetingTally& tally) {
+  static std::vector<double> d;
+  std::vector<gimm::LineMeeting> fast, plain;
+  gimm::line_meetings(chains, &index, l, tol, d, fast);
+  gimm::line_meetings(chains, nullptr, l, tol, d, plain);
+  REQUIRE(fast.size() == plain.size());
+  for (std::size_t i = 0; i < fast.size(); ++i) {
+    CHECK(fast[i].chain == plain[i].chain);
+    CHECK(fast[i].along == plain[i].along);
+    CHECK(fast[i].b == plain[i].b);
+    CHECK(fast[i].radius_px == plain[i].radius_px);
+    CHECK(fast[i].distance_px == plain[i].distance_px);
+    tally.exact_hits += plain[i].along == std::floor(plain[i].along) && plain[i].distance_px == 0;
+    tally.near_misses += plain[i].distance_px > 0;
+  }
+  tally.meetings += plain.size();
+}
+
+}  // namespace
+
+TEST_CASE("Line meetings: the blocked search equals the plain scan", "[match][geometric]") {
+  // Random lines and lines through pixel centres (signed distance exactly 0 at chain points).
+  std::mt19937 rng(21);
+  const std::vector<gimm::Branch2d> chains = random_walks(rng);
+  const gimm::ChainIndex index(chains, 3.0);
+  CHECK_FALSE(index.has_pencil());
+  std::uniform_real_distribution<double> angle(0, 2 * M_PI), offset(-20, 140);
+  MeetingTally tally;
   for (int trial = 0; trial < 600; ++trial) {
     Eigen::Vector3d l;
     if (trial % 3 == 0) {  // through a chain point, along x, y or a diagonal
@@ -121,26 +154,80 @@ TEST_CASE("Line meetings: the blocked search equals the plain scan", "[match][ge
       const double a = angle(rng);
       l << std::cos(a), std::sin(a), -offset(rng);
     }
-    for (const double tol : {0.5, 3.0}) {
-      gimm::detail::line_meetings(chains, &index, l, tol, d, fast);
-      gimm::detail::line_meetings(chains, nullptr, l, tol, d, plain);
-      REQUIRE(fast.size() == plain.size());
-      for (std::size_t i = 0; i < fast.size(); ++i) {
-        CHECK(fast[i].chain == plain[i].chain);
-        CHECK(fast[i].along == plain[i].along);
-        CHECK(fast[i].b == plain[i].b);
-        CHECK(fast[i].radius_px == plain[i].radius_px);
-        CHECK(fast[i].distance_px == plain[i].distance_px);
-        exact_hits += plain[i].along == std::floor(plain[i].along) && plain[i].distance_px == 0;
-        near_misses += plain[i].distance_px > 0;
-      }
-      meetings += plain.size();
-    }
+    for (const double tol : {0.5, 3.0}) check_same_meetings(chains, index, l, tol, tally);
   }
   // Not vacuous: many meetings, some on a chain point exactly, some near misses.
-  CHECK(meetings > 2000);
-  CHECK(exact_hits > 100);
-  CHECK(near_misses > 100);
+  CHECK(tally.meetings > 2000);
+  CHECK(tally.exact_hits > 100);
+  CHECK(tally.near_misses > 100);
+  std::vector<double> d;
+  std::vector<gimm::LineMeeting> out;
+  CHECK_THROWS_WITH(gimm::line_meetings(chains, &index, Eigen::Vector3d(1, 0, -5), 3.5, d, out),
+                    Catch::Contains("tolerance 3 px") && Catch::Contains("3.5"));
+}
+
+TEST_CASE("Line meetings: the pencil index equals the plain scan", "[match][geometric]") {
+  // Lines through one point, as epipolar lines are: far off, inside the chains' area (the point
+  // in some grown boxes), on a chain point, around the chains near and at infinity (parallel
+  // lines).
+  std::mt19937 rng(22);
+  const std::vector<gimm::Branch2d> chains = random_walks(rng);
+  std::vector<Eigen::Vector3d> points = {{2000, -900, 1},
+                                         {50, 50, 1},
+                                         {chains[5].points[3].x(), chains[5].points[3].y(), 1},
+                                         {-4, -1, 1e-9}};
+  for (int t = 0; t < 12; ++t) {  // around the chains (some arcs across the angles' +-pi cut)
+    const double a = t * M_PI / 6;
+    points.emplace_back(50 + 70 * std::cos(a), 50 + 70 * std::sin(a), 1);
+    points.emplace_back(50 + 160 * std::cos(a), 50 + 160 * std::sin(a), 1);
+    points.emplace_back(std::cos(a), std::sin(a), 0);
+  }
+  std::uniform_real_distribution<double> coord(-30, 150);
+  MeetingTally tally;
+  std::size_t reached = 0;
+  for (const Eigen::Vector3d& e : points) {
+    const gimm::ChainIndex index(chains, 3.0, e);
+    REQUIRE(index.has_pencil());
+    for (int trial = 0; trial < 100; ++trial) {
+      // Through e and a random point, or e and a chain point (crossings exactly at points).
+      const auto& c = chains[rng() % chains.size()];
+      const Eigen::Vector2d q =
+          trial % 2 ? Eigen::Vector2d(coord(rng), coord(rng)) : c.points[rng() % c.points.size()];
+      Eigen::Vector3d l = e.cross(q.homogeneous());
+      if (!(l.head<2>().norm() > 0)) continue;
+      l /= l.head<2>().norm();
+      const std::vector<int>& listed = index.chains_for(l);
+      reached += listed.size();
+      // Selective too: a chain whose box lies 20 px or more beyond the line is not listed.
+      for (std::size_t k = 0; k < chains.size(); ++k)
+        if (index.blocks(k).box.side_beyond(l, 20.0))
+          CHECK(std::find(listed.begin(), listed.end(), int(k)) == listed.end());
+      for (const double tol : {0.5, 3.0}) check_same_meetings(chains, index, l, tol, tally);
+    }
+  }
+  CHECK(tally.meetings > 2000);
+  CHECK(tally.exact_hits > 100);
+  CHECK(tally.near_misses > 100);
+  // The index does skip chains: fewer than half of the 17 per line on average (a quarter here).
+  INFO("chains looked at: " << reached << " of " << points.size() * 100 * chains.size());
+  CHECK(reached < points.size() * 100 * chains.size() / 2);
+}
+
+TEST_CASE("Line meetings: the epipole from F", "[match][geometric]") {
+  const gimm::Camerad a = carm_camera(30, 0, 256), b = carm_camera(-20, 25, 256);
+  const Eigen::Matrix3d F = gimm::fundamental_from_cameras(a, b);
+  const auto e = gimm::detail::lines_common_point(F);
+  REQUIRE(e);
+  // Every epipolar line in B passes through it: B's projection of A's source.
+  const Eigen::Vector3d source = b.P() * a.center_homogeneous();
+  CHECK(e->cross(source.normalized()).norm() < 1e-9);
+  for (const Eigen::Vector2d& x : {Eigen::Vector2d(10, 20), Eigen::Vector2d(200, 90)}) {
+    const Eigen::Vector3d l = F * x.homogeneous();
+    CHECK(std::abs(l.dot(*e)) < 1e-12 * l.norm());
+  }
+  CHECK_FALSE(gimm::detail::lines_common_point(Eigen::Matrix3d::Zero()));
+  Eigen::Matrix3d rank1 = Eigen::Vector3d(1, 2, 3) * Eigen::RowVector3d(0.5, -1, 2);
+  CHECK_FALSE(gimm::detail::lines_common_point(rank1));
 }
 
 TEST_CASE("Vesselness peaks on a tube's centre, at the scale of its radius", "[match][geometric]") {

@@ -48,6 +48,7 @@
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/triangulation.hpp"
 #include "gimm/match/centerline_graph.hpp"
+#include "gimm/match/epipolar_meetings.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/vesselness.hpp"
 
@@ -173,113 +174,6 @@ inline double ordering_cost(const Candidate& p, bool p_forwards, const Candidate
   return c_forwards != p_forwards || back ? w : 0.0;
 }
 
-/// The bounding box of a run of chain points, to rule out at once every point of the run that an
-/// epipolar line cannot cross or pass within the tolerance of.
-struct PointBox {
-  double lo_x = 0, lo_y = 0, hi_x = 0, hi_y = 0;
-  /// Points first..last (inclusive).
-  static PointBox of(const std::vector<Eigen::Vector2d>& p, std::size_t first, std::size_t last) {
-    PointBox b{p[first].x(), p[first].y(), p[first].x(), p[first].y()};
-    for (std::size_t j = first + 1; j <= last; ++j) {
-      b.lo_x = std::min(b.lo_x, p[j].x()), b.hi_x = std::max(b.hi_x, p[j].x());
-      b.lo_y = std::min(b.lo_y, p[j].y()), b.hi_y = std::max(b.hi_y, p[j].y());
-    }
-    return b;
-  }
-  /// +1 (-1) when every point of the box lies more than `tol` on the positive (negative) side of
-  /// the line l (unit normal), else 0. The box's nearest and farthest corners follow from the
-  /// signs of the normal. The 1e-6 px slack keeps the test conservative under rounding, so a run
-  /// it rules out holds no crossing and no near miss.
-  int side_beyond(const Eigen::Vector3d& l, double tol) const {
-    const double x_min = l.x() * (l.x() > 0 ? lo_x : hi_x),
-                 x_max = l.x() * (l.x() > 0 ? hi_x : lo_x);
-    const double y_min = l.y() * (l.y() > 0 ? lo_y : hi_y),
-                 y_max = l.y() * (l.y() > 0 ? hi_y : lo_y);
-    const double margin = tol + 1e-6;
-    if (x_min + y_min + l.z() > margin) return 1;
-    if (x_max + y_max + l.z() < -margin) return -1;
-    return 0;
-  }
-};
-
-/// A target chain's box, and the boxes of its blocks of kPoints segments: block q holds points
-/// q kPoints .. min((q + 1) kPoints, m - 1), so consecutive blocks share a point and every
-/// segment between two chain points lies inside one block.
-struct ChainBlocks {
-  static constexpr std::size_t kPoints = 16;
-  PointBox box;
-  std::vector<PointBox> blocks;
-  explicit ChainBlocks(const std::vector<Eigen::Vector2d>& p)
-      : box(PointBox::of(p, 0, p.size() - 1)) {
-    for (std::size_t s = 0; s == 0 || s + 1 < p.size(); s += kPoints)
-      blocks.push_back(PointBox::of(p, s, std::min(s + kPoints, p.size() - 1)));
-  }
-};
-
-/// Where an epipolar line meets a chain: a crossing between two consecutive points (sub-point
-/// position, distance 0), or a near miss (a point within the tolerance, a local minimum of the
-/// distance, with no crossing beside it: tips, grazing vessels, a line off by a few pixels).
-struct LineMeeting {
-  int chain = -1;
-  double along = 0;  ///< position along the chain, in chain points
-  Eigen::Vector2d b;
-  double radius_px = 0;
-  double distance_px = 0;  ///< |signed distance| to the line
-};
-
-/// Every meeting of the line l (unit normal: distances in pixels) with the chains, in chain then
-/// point order, into `out`; `d` is scratch. With `index` (a ChainBlocks per chain) the chains and
-/// blocks that the line cannot meet are skipped; with nullptr every point is looked at (the
-/// reference the fast path is tested against).
-inline void line_meetings(const std::vector<Branch2d>& chains,
-                          const std::vector<ChainBlocks>* index, const Eigen::Vector3d& l,
-                          double tol, std::vector<double>& d, std::vector<LineMeeting>& out) {
-  out.clear();
-  for (std::size_t k = 0; k < chains.size(); ++k) {
-    const Branch2d& chain = chains[k];
-    const std::size_t m = chain.points.size();
-    const int ki = static_cast<int>(k);
-    // Point j is looked at with d[j - 1], d[j] and d[j + 1]: a crossing between j and j + 1,
-    // else a near miss at j.
-    const auto visit = [&](std::size_t j) {
-      if (j + 1 < m && (d[j] == 0 || (d[j] < 0) != (d[j + 1] < 0))) {
-        if (d[j + 1] == 0) return;  // counted at j + 1
-        const double t = d[j] / (d[j] - d[j + 1]);
-        out.push_back({ki, static_cast<double>(j) + t,
-                       chain.points[j] + t * (chain.points[j + 1] - chain.points[j]),
-                       chain.radius_px[j] + t * (chain.radius_px[j + 1] - chain.radius_px[j]),
-                       0.0});
-        return;
-      }
-      const double ad = std::abs(d[j]);
-      if (ad > tol) return;
-      const bool crossing_before = j > 0 && (d[j - 1] < 0) != (d[j] < 0);
-      const bool local_min =
-          (j == 0 || std::abs(d[j - 1]) > ad) && (j + 1 == m || std::abs(d[j + 1]) >= ad);
-      if (local_min && !crossing_before)
-        out.push_back({ki, static_cast<double>(j), chain.points[j], chain.radius_px[j], ad});
-    };
-    d.resize(m);
-    if (!index) {
-      for (std::size_t j = 0; j < m; ++j) d[j] = l.dot(chain.points[j].homogeneous());
-      for (std::size_t j = 0; j < m; ++j) visit(j);
-      continue;
-    }
-    const ChainBlocks& blocks = (*index)[k];
-    if (blocks.box.side_beyond(l, tol)) continue;
-    // A skipped block (all its points beyond tol on one side) holds no crossing and no near
-    // miss. The next block's first point is its last, so beyond tol as well: visit() returns
-    // there before it reads d[j - 1], which this block left unset.
-    for (std::size_t q = 0; q < blocks.blocks.size(); ++q) {
-      const std::size_t first = q * ChainBlocks::kPoints,
-                        last = std::min(first + ChainBlocks::kPoints, m - 1);
-      if (blocks.blocks[q].side_beyond(l, tol)) continue;
-      for (std::size_t j = first; j <= last; ++j) d[j] = l.dot(chain.points[j].homogeneous());
-      for (std::size_t j = first; j < last || (j == last && last + 1 == m); ++j) visit(j);
-    }
-  }
-}
-
 /// Points every `step` pixels of arc length along a chain (the first point included).
 inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double step) {
   std::vector<std::size_t> out{0};
@@ -347,11 +241,11 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
   std::vector<GeometricMatch> out;
   const bool with_intensity = from.image && to.image && o.w_intensity > 0;
   const double tol = o.epipolar_tolerance_px;
-  // Target chains and blocks of them that a line cannot meet are skipped (ChainBlocks).
-  std::vector<detail::ChainBlocks> indexed;
-  for (const Branch2d& chain : to.graph.branches) indexed.emplace_back(chain.points);
-  std::vector<double> d;                      // line_meetings' scratch
-  std::vector<detail::LineMeeting> meetings;  // of the current sample's line
+  // The target chains indexed by the lines that can reach them; every line F a passes through
+  // the epipole of `to`.
+  const ChainIndex index(to.graph.branches, tol, detail::lines_common_point(F));
+  std::vector<double> d;              // line_meetings' scratch
+  std::vector<LineMeeting> meetings;  // of the current sample's line
   // One candidate set per sample.
   const auto candidates_of = [&](const Eigen::Vector2d& a, double ra, double ia) {
     std::vector<detail::Candidate> cands;
@@ -360,8 +254,8 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     if (!(n > 0) || !l.allFinite()) return cands;
     l /= n;
     const Ray<double> ray_a = from.camera.ray(a.x(), a.y());
-    detail::line_meetings(to.graph.branches, &indexed, l, tol, d, meetings);
-    for (const detail::LineMeeting& mt : meetings) {
+    line_meetings(to.graph.branches, &index, l, tol, d, meetings);
+    for (const LineMeeting& mt : meetings) {
       const auto X = two_ray_midpoint(ray_a, to.camera.ray(mt.b.x(), mt.b.y()));
       if (!X || (o.heart_radius_mm > 0 && (*X - isocentre).norm() > o.heart_radius_mm)) continue;
       const double rb = mt.radius_px, off = mt.distance_px / tol;
