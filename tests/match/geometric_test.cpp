@@ -230,6 +230,32 @@ TEST_CASE("Line meetings: the epipole from F", "[match][geometric]") {
   CHECK_FALSE(gimm::detail::lines_common_point(rank1));
 }
 
+TEST_CASE("Point grid: the matches within a radius, as brute force finds them",
+          "[match][geometric]") {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> coord(-40, 300);
+  std::vector<gimm::GeometricMatch> matches(400);
+  for (auto& m : matches) m.a = {coord(rng), coord(rng)}, m.b = {coord(rng) / 8, coord(rng) / 8};
+  for (const bool by_a : {true, false})
+    for (const double cell : {3.0, 6.0}) {
+      const gimm::detail::PointGrid grid(matches, by_a, cell);
+      for (int q = 0; q < 300; ++q) {
+        const Eigen::Vector2d p(coord(rng) / (by_a ? 1 : 8), coord(rng) / (by_a ? 1 : 8));
+        std::vector<std::size_t> found, truth;
+        grid.visit(p, cell, [&](std::size_t k) { found.push_back(k); });
+        for (std::size_t k = 0; k < matches.size(); ++k)
+          if (((by_a ? matches[k].a : matches[k].b) - p).norm() <= cell) truth.push_back(k);
+        std::sort(found.begin(), found.end());
+        CHECK(found == truth);
+      }
+    }
+  const std::vector<gimm::GeometricMatch> none;
+  const gimm::detail::PointGrid empty(none, true, 3.0);
+  int calls = 0;
+  empty.visit({1, 1}, 3.0, [&](std::size_t) { ++calls; });
+  CHECK(calls == 0);
+}
+
 TEST_CASE("Vesselness peaks on a tube's centre, at the scale of its radius", "[match][geometric]") {
   const double radius = 3.0, row = 32;  // rows 29..35: half-width 3.5 px
   const gimm::Image<float> im = bar_image(64, radius, row);

@@ -73,10 +73,14 @@ constexpr int kMaxRadiusPx = 32;
 inline double distance_to_zero(const Image<std::uint8_t>& m, int r, int c) {
   int best2 = kMaxRadiusPx * kMaxRadiusPx;
   // Ring `ring` holds distances >= ring, so the search ends once (ring - 1)^2 >= best2.
-  for (int ring = 1; ring <= kMaxRadiusPx && (ring - 1) * (ring - 1) < best2; ++ring)
+  for (int ring = 1; ring <= kMaxRadiusPx && (ring - 1) * (ring - 1) < best2; ++ring) {
+    const bool inside =
+        r - ring >= 0 && c - ring >= 0 && r + ring < m.rows() && c + ring < m.cols();
     for (int dr = -ring; dr <= ring; ++dr)
       for (int dc = -ring; dc <= ring; dc += (std::abs(dr) == ring ? 1 : 2 * ring))
-        if (!lit(m, r + dr, c + dc)) best2 = std::min(best2, dr * dr + dc * dc);
+        if (inside ? m(r + dr, c + dc) == 0 : !lit(m, r + dr, c + dc))
+          best2 = std::min(best2, dr * dr + dc * dc);
+  }
   return std::sqrt(static_cast<double>(best2));
 }
 

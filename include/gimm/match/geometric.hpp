@@ -39,7 +39,6 @@
 #include <limits>
 #include <optional>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "gimm/core/error.hpp"
@@ -131,22 +130,38 @@ inline double bilinear(const Image<float>& im, const Eigen::Vector2d& p) {
 }
 
 /// Matches bucketed by one of their two points (a when keyed_by_a), in square cells of `cell`
-/// pixels: visit() calls back every match within `radius` (<= cell) of a point.
+/// pixels over the points' bounding box (each cell's matches in ascending order, stored one cell
+/// after another): visit() calls back every match within `radius` (<= cell) of a point.
 class PointGrid {
  public:
   PointGrid(const std::vector<GeometricMatch>& matches, bool by_a, double cell)
       : keyed_by_a(by_a), matches_(matches), cell_(std::max(cell, 1e-6)) {
-    for (std::size_t k = 0; k < matches.size(); ++k) cells_[key(at(k))].push_back(k);
+    if (matches.empty()) return;
+    Eigen::Vector2d lo = at(0), hi = lo;
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+      GIMM_CHECK(at(k).allFinite(), "geometric matcher: a match has a non-finite point");
+      lo = lo.cwiseMin(at(k)), hi = hi.cwiseMax(at(k));
+    }
+    cell_ = std::max(cell_, (hi - lo).maxCoeff() / 2048);  // at most 2048 cells a side
+    x0_ = cell_of(lo.x()), y0_ = cell_of(lo.y());
+    nx_ = cell_of(hi.x()) - x0_ + 1, ny_ = cell_of(hi.y()) - y0_ + 1;
+    start_.assign(static_cast<std::size_t>(nx_ * ny_ + 1), 0);
+    for (std::size_t k = 0; k < matches.size(); ++k) ++start_[index(at(k)) + 1];
+    for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
+    order_.resize(matches.size());
+    std::vector<std::size_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t k = 0; k < matches.size(); ++k) order_[fill[index(at(k))]++] = k;
   }
   template <class F>
   void visit(const Eigen::Vector2d& p, double radius, F&& f) const {
-    const long cx = cell_of(p.x()), cy = cell_of(p.y());
-    for (long dy = -1; dy <= 1; ++dy)
-      for (long dx = -1; dx <= 1; ++dx) {
-        const auto it = cells_.find(pack(cx + dx, cy + dy));
-        if (it == cells_.end()) continue;
-        for (std::size_t k : it->second)
-          if ((at(k) - p).norm() <= radius) f(k);
+    if (order_.empty()) return;
+    const long cx = cell_of(p.x()) - x0_, cy = cell_of(p.y()) - y0_;
+    for (long y = cy - 1; y <= cy + 1; ++y)
+      for (long x = cx - 1; x <= cx + 1; ++x) {
+        if (x < 0 || y < 0 || x >= nx_ || y >= ny_) continue;
+        const auto c = static_cast<std::size_t>(y * nx_ + x);
+        for (std::size_t i = start_[c]; i < start_[c + 1]; ++i)
+          if ((at(order_[i]) - p).norm() <= radius) f(order_[i]);
       }
   }
   const bool keyed_by_a;
@@ -156,11 +171,13 @@ class PointGrid {
     return keyed_by_a ? matches_[k].a : matches_[k].b;
   }
   long cell_of(double x) const { return static_cast<long>(std::floor(x / cell_)); }
-  static std::int64_t pack(long x, long y) { return (std::int64_t(x) << 32) ^ (y & 0xffffffff); }
-  std::int64_t key(const Eigen::Vector2d& p) const { return pack(cell_of(p.x()), cell_of(p.y())); }
+  std::size_t index(const Eigen::Vector2d& p) const {
+    return static_cast<std::size_t>((cell_of(p.y()) - y0_) * nx_ + (cell_of(p.x()) - x0_));
+  }
   const std::vector<GeometricMatch>& matches_;
   double cell_;
-  std::unordered_map<std::int64_t, std::vector<std::size_t>> cells_;
+  long x0_ = 0, y0_ = 0, nx_ = 0, ny_ = 0;
+  std::vector<std::size_t> start_, order_;  // cell c holds order_[start_[c] .. start_[c + 1])
 };
 
 /// The ordering term between consecutive samples' candidates p then c, each walking its B chain
