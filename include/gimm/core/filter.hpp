@@ -31,12 +31,17 @@ inline std::vector<double> gaussian_kernel(double sigma, int order) {
 }
 
 /// Convolution along x (each row) with `kernel` (odd length), in float, borders replicated,
-/// through a padded line buffer: the inner loop runs along contiguous memory and vectorises.
+/// through a padded line buffer: the inner loops run along contiguous memory and vectorise.
+/// Taps go four to a pass over the output line (one load and store of it per four taps: the
+/// passes are bound by those, not by the products).
 inline void convolve_rows(const Image<float>& in, const std::vector<float>& kernel,
                           Image<float>& out) {
   const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
+  const int taps = static_cast<int>(kernel.size());
   if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
   std::vector<float> line(static_cast<std::size_t>(cols + 2 * half));
+  // out(c) = sum_k K[k] in(c - k): tap j of the line is in(c + j - half), weight K[taps - 1 - j].
+  const auto weight = [&](int j) { return kernel[static_cast<std::size_t>(taps - 1 - j)]; };
   for (int r = 0; r < rows; ++r) {
     const float* src = in.data() + static_cast<std::size_t>(r) * cols;
     std::fill(line.begin(), line.begin() + half, src[0]);
@@ -44,27 +49,47 @@ inline void convolve_rows(const Image<float>& in, const std::vector<float>& kern
     std::fill(line.begin() + half + cols, line.end(), src[cols - 1]);
     float* dst = out.data() + static_cast<std::size_t>(r) * cols;
     std::fill(dst, dst + cols, 0.0f);
-    // out(c) = sum_k K[k] in(c - k): tap j of the line is in(c + j - half), weight K[half - j].
-    for (std::size_t j = 0; j < kernel.size(); ++j) {
-      const float w = kernel[kernel.size() - 1 - j];
-      for (int c = 0; c < cols; ++c) dst[c] += w * line[j + static_cast<std::size_t>(c)];
+    int j = 0;
+    for (; j + 4 <= taps; j += 4) {
+      const float w0 = weight(j), w1 = weight(j + 1), w2 = weight(j + 2), w3 = weight(j + 3);
+      const float* x = line.data() + j;
+      for (int c = 0; c < cols; ++c)
+        dst[c] += (w0 * x[c] + w1 * x[c + 1]) + (w2 * x[c + 2] + w3 * x[c + 3]);
+    }
+    for (; j < taps; ++j) {
+      const float w = weight(j);
+      const float* x = line.data() + j;
+      for (int c = 0; c < cols; ++c) dst[c] += w * x[c];
     }
   }
 }
 
-/// Convolution along y (each column) as weighted sums of whole rows, borders replicated.
+/// Convolution along y (each column) as weighted sums of whole rows, borders replicated, four
+/// rows to a pass as convolve_rows().
 inline void convolve_cols(const Image<float>& in, const std::vector<float>& kernel,
                           Image<float>& out) {
   const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
   if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
+  // out(r) = sum_k K[half + k] in(r - k)
+  const auto weight = [&](int k) { return kernel[static_cast<std::size_t>(k + half)]; };
+  const auto row = [&](int r) {
+    return in.data() + static_cast<std::size_t>(std::clamp(r, 0, rows - 1)) * cols;
+  };
   for (int r = 0; r < rows; ++r) {
     float* dst = out.data() + static_cast<std::size_t>(r) * cols;
     std::fill(dst, dst + cols, 0.0f);
-    for (int k = -half; k <= half; ++k) {
-      const float w = kernel[static_cast<std::size_t>(k + half)];
-      const float* src =
-          in.data() + static_cast<std::size_t>(std::clamp(r - k, 0, rows - 1)) * cols;
-      for (int c = 0; c < cols; ++c) dst[c] += w * src[c];
+    int k = -half;
+    for (; k + 3 <= half; k += 4) {
+      const float w0 = weight(k), w1 = weight(k + 1), w2 = weight(k + 2), w3 = weight(k + 3);
+      const float *s0 = row(r - k), *s1 = row(r - k - 1), *s2 = row(r - k - 2),
+                  *s3 = row(r - k - 3);
+      for (int c = 0; c < cols; ++c)
+        dst[c] += (w0 * s0[c] + w1 * s1[c]) + (w2 * s2[c] + w3 * s3[c]);
+    }
+    for (; k <= half; ++k) {
+      const float w = weight(k);
+      const float* s0 = row(r - k);
+      for (int c = 0; c < cols; ++c) dst[c] += w * s0[c];
     }
   }
 }
