@@ -9,9 +9,10 @@
 ///    the crossings of its epipolar line F a with B's centerline chains (sub-pixel, between two
 ///    chain pixels whose signed line distances differ in sign), and the chain pixels that pass
 ///    within `epipolar_tolerance_px` of the line without crossing it (tips, grazing vessels, a
-///    line that is off because the geometry is). Each candidate is triangulated (midpoint of the
-///    two viewing rays); candidates outside the heart sphere (heart_radius_mm around the
-///    isocentre) are not considered.
+///    line that is off because the geometry is), found by line_meetings() with B's chains
+///    indexed around B's epipole (epipolar_meetings.hpp). Each candidate is triangulated
+///    (midpoint of the two viewing rays); candidates outside the heart sphere (heart_radius_mm
+///    around the isocentre) are not considered.
 /// 3. Along the branch, a chain DP (Viterbi) chooses one candidate or "no match" per sample:
 ///      unary     w_epipolar (d / tol)^2 + w_radius |ra - rb| / max(ra, rb) + w_intensity |Ia - Ib|
 ///                (no match: no_match_cost)
