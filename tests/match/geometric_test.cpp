@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <tuple>
 
@@ -188,6 +189,8 @@ TEST_CASE("Line meetings: the pencil index equals the plain scan", "[match][geom
   for (const Eigen::Vector3d& e : points) {
     const gimm::ChainIndex index(chains, 3.0, e);
     REQUIRE(index.has_pencil());
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    CHECK(index.chains_for(Eigen::Vector3d(nan, 0, 1)).size() == chains.size());  // no angle
     for (int trial = 0; trial < 100; ++trial) {
       // Through e and a random point, or e and a chain point (crossings exactly at points).
       const auto& c = chains[rng() % chains.size()];

@@ -122,6 +122,7 @@ class ChainIndex {
     if (buckets_.empty()) return all_;
     const Eigen::Vector3d ln = normalised_line(l);
     double phi = std::atan2(ln.dot(l1_), ln.dot(l0_));  // l and -l: one angle mod pi
+    if (!std::isfinite(phi)) return all_;               // a non-finite line: no angle
     if (phi < 0) phi += kPi;
     const int b = std::clamp(static_cast<int>(phi / kPi * kBuckets), 0, kBuckets - 1);
     return buckets_[static_cast<std::size_t>(b)];
