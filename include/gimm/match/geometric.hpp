@@ -234,7 +234,7 @@ std::vector<std::vector<double>> chain_min_marginals(const std::vector<std::size
       alpha[i][s] = best + unary(i, s);
     }
   }
-  std::vector<double> ahead;  // unary(i + 1, sn) + beta[i + 1][sn]
+  std::vector<double> ahead;  // unary(i + 1, sn), once per i
   for (std::size_t i = n; i-- > 0;) {
     beta[i].assign(states[i], i + 1 == n ? 0.0 : inf);
     if (i + 1 == n) continue;
