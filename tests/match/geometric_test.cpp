@@ -72,6 +72,7 @@ TEST_CASE("Chain DP min-marginals equal brute force", "[match][geometric]") {
     const auto unary = [&](std::size_t i, std::size_t s) { return u[i][s]; };
     const auto pair = [&](std::size_t i, std::size_t a, std::size_t b) { return p[i][a][b]; };
     const auto dp = gimm::chain_min_marginals(states, unary, pair);
+    CHECK(gimm::chain_min_marginals(states, unary, pair, 0) == dp);  // pair costs not kept
     // Brute force: every state sequence.
     std::vector<std::vector<double>> best(n);
     for (std::size_t i = 0; i < n; ++i) best[i].assign(states[i], 1e300);
@@ -228,6 +229,30 @@ TEST_CASE("Line meetings: the epipole from F", "[match][geometric]") {
     const Eigen::Vector3d l = F * x.homogeneous();
     CHECK(std::abs(l.dot(*e)) < 1e-12 * l.norm());
   }
+  // The matcher's use: chains indexed around the epipole of F, searched with lines F a.
+  std::mt19937 rng(23);
+  std::vector<gimm::Branch2d> chains = random_walks(rng);
+  for (auto& c : chains)
+    for (auto& p : c.points) p += Eigen::Vector2d(60, 60);  // inside the 256 px view
+  const gimm::ChainIndex index(chains, 3.0, e);
+  MeetingTally tally;
+  std::uniform_real_distribution<double> coord(0, 255);
+  for (int trial = 0; trial < 400; ++trial) {
+    Eigen::Vector3d l = F * Eigen::Vector3d(coord(rng), coord(rng), 1);
+    l /= l.head<2>().norm();
+    check_same_meetings(chains, index, l, 3.0, tally);
+  }
+  CHECK(tally.meetings > 200);
+  // A non-finite line is compared with nothing: no meetings, on either path.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  check_same_meetings(chains, index, Eigen::Vector3d(nan, 0, 1), 3.0, tally);
+  std::vector<double> d;
+  std::vector<gimm::LineMeeting> out;
+  gimm::line_meetings(chains, nullptr, Eigen::Vector3d(nan, 0, 1), 3.0, d, out);
+  CHECK(out.empty());
+  chains[2].points[1].x() = nan;
+  CHECK_THROWS_WITH(gimm::ChainIndex(chains, 3.0, e),
+                    Catch::Contains("chain 2") && Catch::Contains("non-finite"));
   CHECK_FALSE(gimm::detail::lines_common_point(Eigen::Matrix3d::Zero()));
   Eigen::Matrix3d rank1 = Eigen::Vector3d(1, 2, 3) * Eigen::RowVector3d(0.5, -1, 2);
   CHECK_FALSE(gimm::detail::lines_common_point(rank1));

@@ -103,7 +103,11 @@ class ChainIndex {
     GIMM_CHECK(std::isfinite(tol) && tol > 0,
                "ChainIndex: the tolerance must be finite and > 0, got " << tol);
     for (const Branch2d& chain : chains) {
-      GIMM_CHECK(!chain.points.empty(), "ChainIndex: a chain has no points");
+      GIMM_CHECK(!chain.points.empty(), "ChainIndex: chain " << blocks_.size() << " has no points");
+      for (const Eigen::Vector2d& p : chain.points)
+        GIMM_CHECK(p.allFinite(), "ChainIndex: chain " << blocks_.size()
+                                                       << " has a non-finite point (" << p.x()
+                                                       << ", " << p.y() << ")");
       blocks_.emplace_back(chain.points);
       all_.push_back(static_cast<int>(all_.size()));
     }
@@ -119,10 +123,9 @@ class ChainIndex {
   /// The chains (ascending) that the line l may meet within tol: those of l's angle bucket when
   /// the index has a pencil (l must pass through its point), else all.
   const std::vector<int>& chains_for(const Eigen::Vector3d& l) const {
-    if (buckets_.empty()) return all_;
+    if (buckets_.empty() || !l.allFinite()) return all_;  // a non-finite line has no angle
     const Eigen::Vector3d ln = normalised_line(l);
     double phi = std::atan2(ln.dot(l1_), ln.dot(l0_));  // l and -l: one angle mod pi
-    if (!std::isfinite(phi)) return all_;               // a non-finite line: no angle
     if (phi < 0) phi += kPi;
     const int b = std::clamp(static_cast<int>(phi / kPi * kBuckets), 0, kBuckets - 1);
     return buckets_[static_cast<std::size_t>(b)];
@@ -230,7 +233,7 @@ inline void line_meetings(const std::vector<Branch2d>& chains, const ChainIndex*
         return;
       }
       const double ad = std::abs(d[j]);
-      if (ad > tol) return;
+      if (!(ad <= tol)) return;  // NaN too
       const bool crossing_before = j > 0 && (d[j - 1] < 0) != (d[j] < 0);
       const bool local_min =
           (j == 0 || std::abs(d[j - 1]) > ad) && (j + 1 == m || std::abs(d[j + 1]) >= ad);

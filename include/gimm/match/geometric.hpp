@@ -143,9 +143,14 @@ class PointGrid {
       GIMM_CHECK(at(k).allFinite(), "geometric matcher: a match has a non-finite point");
       lo = lo.cwiseMin(at(k)), hi = hi.cwiseMax(at(k));
     }
-    cell_ = std::max(cell_, (hi - lo).maxCoeff() / 2048);  // at most 2048 cells a side
-    x0_ = cell_of(lo.x()), y0_ = cell_of(lo.y());
-    nx_ = cell_of(hi.x()) - x0_ + 1, ny_ = cell_of(hi.y()) - y0_ + 1;
+    // Cells double in size while there are more than max(65536, 16 per match) of them.
+    const long most = std::max<long>(1 << 16, 16 * static_cast<long>(matches.size()));
+    cell_ = std::max(cell_, (hi - lo).maxCoeff() / 2048);
+    for (;; cell_ *= 2) {
+      x0_ = cell_of(lo.x()), y0_ = cell_of(lo.y());
+      nx_ = cell_of(hi.x()) - x0_ + 1, ny_ = cell_of(hi.y()) - y0_ + 1;
+      if (nx_ * ny_ <= most) break;
+    }
     start_.assign(static_cast<std::size_t>(nx_ * ny_ + 1), 0);
     for (std::size_t k = 0; k < matches.size(); ++k) ++start_[index(at(k)) + 1];
     for (std::size_t c = 1; c < start_.size(); ++c) start_[c] += start_[c - 1];
@@ -211,26 +216,34 @@ inline std::vector<std::size_t> resample_chain(const Branch2d& chain, double ste
 /// Min-marginals of a chain: cost[i][s] = the least total cost of a state sequence that has state
 /// s at position i, where a sequence costs sum_i unary(i, s_i) + sum_{i>0} pair(i, s_{i-1}, s_i).
 /// Forward (alpha) and backward (beta) passes, O(n S^2); each pair cost is evaluated once and
-/// kept for both passes.
+/// kept for both passes, unless the chain has more than `cache_limit` of them (then evaluated in
+/// each pass: the same values, without n S^2 of memory).
 template <class Unary, class Pair>
 std::vector<std::vector<double>> chain_min_marginals(const std::vector<std::size_t>& states,
-                                                     const Unary& unary, const Pair& pair) {
+                                                     const Unary& unary, const Pair& pair,
+                                                     std::size_t cache_limit = 1 << 22) {
   const std::size_t n = states.size();
   const double inf = std::numeric_limits<double>::infinity();
+  std::size_t pairs = 0;
+  for (std::size_t i = 1; i < n; ++i) pairs += states[i - 1] * states[i];
   // costs[i][sp * states[i] + s] = pair(i, sp, s)
   std::vector<std::vector<double>> costs(n), alpha(n), beta(n);
-  for (std::size_t i = 1; i < n; ++i) {
+  const bool cached = pairs <= cache_limit;
+  for (std::size_t i = 1; i < n && cached; ++i) {
     costs[i].resize(states[i - 1] * states[i]);
     for (std::size_t sp = 0; sp < states[i - 1]; ++sp)
       for (std::size_t s = 0; s < states[i]; ++s) costs[i][sp * states[i] + s] = pair(i, sp, s);
   }
+  const auto cost = [&](std::size_t i, std::size_t sp, std::size_t s) {
+    return cached ? costs[i][sp * states[i] + s] : pair(i, sp, s);
+  };
   for (std::size_t i = 0; i < n; ++i) {
     alpha[i].assign(states[i], inf);
     for (std::size_t s = 0; s < states[i]; ++s) {
       double best = i == 0 ? 0.0 : inf;
       if (i > 0)
         for (std::size_t sp = 0; sp < states[i - 1]; ++sp)
-          best = std::min(best, alpha[i - 1][sp] + costs[i][sp * states[i] + s]);
+          best = std::min(best, alpha[i - 1][sp] + cost(i, sp, s));
       alpha[i][s] = best + unary(i, s);
     }
   }
@@ -242,8 +255,7 @@ std::vector<std::vector<double>> chain_min_marginals(const std::vector<std::size
     for (std::size_t sn = 0; sn < states[i + 1]; ++sn) ahead[sn] = unary(i + 1, sn);
     for (std::size_t s = 0; s < states[i]; ++s)
       for (std::size_t sn = 0; sn < states[i + 1]; ++sn)
-        beta[i][s] = std::min(beta[i][s],
-                              costs[i + 1][s * states[i + 1] + sn] + ahead[sn] + beta[i + 1][sn]);
+        beta[i][s] = std::min(beta[i][s], cost(i + 1, s, sn) + ahead[sn] + beta[i + 1][sn]);
   }
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t s = 0; s < states[i]; ++s) alpha[i][s] += beta[i][s];

@@ -109,8 +109,9 @@ inline void eigen_2x2(float xx, float xy, float yy, float& l1, float& l2) {
 
 /// The eigenvalues of the Hessian (xx, xy, yy) at scale s, s^2-normalised: eigen_2x2() at every
 /// pixel, in two passes that vectorise: Eigen's packet square root (within a few ulp of the
-/// scalar one), then the pair ordered by magnitude without a branch (|mean - root| >
-/// |mean + root| exactly when mean < 0).
+/// scalar one; it has no overflow guard, so Hessian entries past about 1e19 would give NaN where
+/// the scalar rule gives infinities: far beyond any image's), then the pair ordered by magnitude
+/// without a branch (|mean - root| > |mean + root| when mean < 0 and root > 0; equal otherwise).
 inline ScaleEigen scale_eigen(const Image<float>& xx, const Image<float>& xy,
                               const Image<float>& yy, double s) {
   ScaleEigen e{Image<float>(xx.rows(), xx.cols()), Image<float>(xx.rows(), xx.cols())};
