@@ -120,6 +120,8 @@ void check_same_meetings(const std::vector<gimm::Branch2d>& chains, const gimm::
                          const Eigen::Vector3d& l, double tol, MeetingTally& tally) {
   static std::vector<double> d;
   std::vector<gimm::LineMeeting> fast, plain;
+  // Scratch full of NaN: a read of a distance the fast path did not compute would lose meetings.
+  d.assign(d.size(), std::numeric_limits<double>::quiet_NaN());
   gimm::line_meetings(chains, &index, l, tol, d, fast);
   gimm::line_meetings(chains, nullptr, l, tol, d, plain);
   REQUIRE(fast.size() == plain.size());

@@ -27,6 +27,7 @@
 #include <optional>
 #include <vector>
 
+#include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/match/centerline_graph.hpp"
 
@@ -44,6 +45,11 @@ struct PointBox {
       b.lo_y = std::min(b.lo_y, p[j].y()), b.hi_y = std::max(b.hi_y, p[j].y());
     }
     return b;
+  }
+  /// Grows to hold `other` too.
+  void cover(const PointBox& other) {
+    lo_x = std::min(lo_x, other.lo_x), hi_x = std::max(hi_x, other.hi_x);
+    lo_y = std::min(lo_y, other.lo_y), hi_y = std::max(hi_y, other.hi_y);
   }
   /// +1 (-1) when every point of the box lies more than `tol` on the positive (negative) side of
   /// the line l (unit normal), else 0. The 1e-6 px slack keeps the test conservative under
@@ -132,8 +138,6 @@ class ChainIndex {
   }
 
  private:
-  static constexpr double kPi = 3.14159265358979323846;
-
   /// A line in the index's frame: pixels less the chains' centre, over their half-extent, so
   /// that the bucket angles resolve the chains' area alike for an epipole near or at infinity.
   Eigen::Vector3d normalised_line(const Eigen::Vector3d& l) const {
@@ -142,10 +146,7 @@ class ChainIndex {
 
   void build_pencil(const Eigen::Vector3d& epipole) {
     detail::PointBox all = blocks_.front().box;
-    for (const auto& b : blocks_) {
-      all.lo_x = std::min(all.lo_x, b.box.lo_x), all.hi_x = std::max(all.hi_x, b.box.hi_x);
-      all.lo_y = std::min(all.lo_y, b.box.lo_y), all.hi_y = std::max(all.hi_y, b.box.hi_y);
-    }
+    for (const auto& b : blocks_) all.cover(b.box);
     centre_ = {0.5 * (all.lo_x + all.hi_x), 0.5 * (all.lo_y + all.hi_y)};
     scale_ = std::max(1.0, 0.5 * std::hypot(all.hi_x - all.lo_x, all.hi_y - all.lo_y));
     const Eigen::Vector3d e =
