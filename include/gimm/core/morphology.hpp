@@ -1,6 +1,7 @@
 #pragma once
-/// Grey-level morphology with square windows: running maxima and minima along rows and columns
-/// (van Herk / Gil-Werman: three comparisons per pixel whatever the window's width), the closing
+/// Grey-level morphology with square windows: running maxima and minima down the columns and
+/// along the rows (van Herk / Gil-Werman: three comparisons per pixel whatever the window's
+/// width), the closing
 /// built from them, and the black top-hat that keeps the dark structures narrower than the
 /// window. Windows are clipped to the image (for a maximum or a minimum the same as replicating
 /// the edge pixel), so a closing is never below its input.
@@ -14,44 +15,65 @@
 namespace gimm {
 namespace detail {
 
-/// out[i] = pick over line[i - half .. i + half] clipped to [0, n), for a contiguous line.
-/// `pick` is a max or a min; `pad`, `ahead` and `behind` are scratch.
+/// out(i, c) = pick over in(i - half .. i + half, c), the window clipped to the rows. Whole rows
+/// at a time, so the inner loops run along contiguous memory and vectorise.
 template <class Pick>
-void running_extreme(const float* line, int n, int half, Pick pick, float* out,
-                     std::vector<float>& pad, std::vector<float>& ahead,
-                     std::vector<float>& behind) {
-  const int width = 2 * half + 1;
-  // The line padded by its edge values, in whole blocks of `width`: the window of output i is
-  // pad[i .. i + width - 1], which spans at most two blocks.
-  const int padded = (n + 2 * half + width - 1) / width * width;
-  pad.resize(static_cast<std::size_t>(padded));
-  ahead.resize(pad.size());
-  behind.resize(pad.size());
-  for (int j = 0; j < padded; ++j) pad[j] = line[std::clamp(j - half, 0, n - 1)];
-  // ahead[j]: from j's block start to j; behind[j]: from j to its block end.
-  for (int j = 0; j < padded; ++j) ahead[j] = j % width == 0 ? pad[j] : pick(ahead[j - 1], pad[j]);
-  for (int j = padded - 1; j >= 0; --j)
-    behind[j] = j % width == width - 1 ? pad[j] : pick(behind[j + 1], pad[j]);
-  for (int i = 0; i < n; ++i) out[i] = pick(behind[i], ahead[i + width - 1]);
+Image<float> extreme_down_columns(const Image<float>& in, int half, Pick pick) {
+  const int n = in.rows(), cols = in.cols(), width = 2 * half + 1;
+  // Padded row j is input row j - half (clamped: the edge rows repeat). The window of output row
+  // i is padded rows i .. i + width - 1. Blocks of `width` padded rows starting at b: for output
+  // rows b .. b + width - 1, `behind` holds each row's extreme to the end of block b and `ahead`
+  // each row's extreme from the start of block b + width, so a window is one pick of the two.
+  const auto source = [&](int j) { return &in(std::clamp(j - half, 0, n - 1), 0); };
+  std::vector<float> behind(static_cast<std::size_t>(width) * cols), ahead(behind.size());
+  const auto row = [&](std::vector<float>& v, int k) { return v.data() + std::size_t(k) * cols; };
+  const auto combine = [&](const float* x, const float* y, float* out) {
+    for (int c = 0; c < cols; ++c) out[c] = pick(x[c], y[c]);
+  };
+  Image<float> out(n, cols);
+  for (int b = 0; b < n; b += width) {
+    std::copy(source(b + width - 1), source(b + width - 1) + cols, row(behind, width - 1));
+    for (int k = width - 2; k >= 0; --k) combine(row(behind, k + 1), source(b + k), row(behind, k));
+    std::copy(source(b + width), source(b + width) + cols, row(ahead, 0));
+    for (int k = 1; k < width; ++k)
+      combine(row(ahead, k - 1), source(b + width + k), row(ahead, k));
+    std::copy(row(behind, 0), row(behind, 0) + cols, &out(b, 0));  // the window is block b
+    for (int i = b + 1; i < std::min(b + width, n); ++i)
+      combine(row(behind, i - b), row(ahead, i - b - 1), &out(i, 0));
+  }
+  return out;
 }
 
-/// The square-window running extreme of an image: along each row, then along each column.
+/// out[i] = pick over x[i - half .. i + half], clipped to [0, n): the blocks of
+/// extreme_down_columns() along one row. `behind` and `ahead` hold 2 half + 1 values each.
+template <class Pick>
+void extreme_along_row(const float* x, int n, int half, Pick pick, float* out, float* behind,
+                       float* ahead) {
+  const int width = 2 * half + 1;
+  const auto source = [&](int j) { return x[std::clamp(j - half, 0, n - 1)]; };
+  for (int b = 0; b < n; b += width) {
+    behind[width - 1] = source(b + width - 1);
+    for (int k = width - 2; k >= 0; --k) behind[k] = pick(behind[k + 1], source(b + k));
+    ahead[0] = source(b + width);
+    for (int k = 1; k < width; ++k) ahead[k] = pick(ahead[k - 1], source(b + width + k));
+    out[b] = behind[0];
+    for (int i = b + 1; i < std::min(b + width, n); ++i)
+      out[i] = pick(behind[i - b], ahead[i - b - 1]);
+  }
+}
+
+/// The square-window running extreme of an image: along the rows, then down the columns.
 template <class Pick>
 Image<float> square_extreme(const Image<float>& in, int width, Pick pick) {
   GIMM_CHECK(width >= 1 && width % 2 == 1,
              "morphology: the window width must be odd and >= 1 px, got " << width);
-  const int rows = in.rows(), cols = in.cols(), half = width / 2;
-  Image<float> out(rows, cols);
-  std::vector<float> pad, ahead, behind, column(static_cast<std::size_t>(rows)),
-      column_out(column.size());
-  for (int r = 0; r < rows; ++r)
-    running_extreme(&in(r, 0), cols, half, pick, &out(r, 0), pad, ahead, behind);
-  for (int c = 0; c < cols; ++c) {  // columns through a contiguous copy
-    for (int r = 0; r < rows; ++r) column[static_cast<std::size_t>(r)] = out(r, c);
-    running_extreme(column.data(), rows, half, pick, column_out.data(), pad, ahead, behind);
-    for (int r = 0; r < rows; ++r) out(r, c) = column_out[static_cast<std::size_t>(r)];
-  }
-  return out;
+  if (in.empty()) return in;
+  const int half = width / 2;
+  Image<float> along(in.rows(), in.cols());
+  std::vector<float> behind(static_cast<std::size_t>(width)), ahead(behind.size());
+  for (int r = 0; r < in.rows(); ++r)
+    extreme_along_row(&in(r, 0), in.cols(), half, pick, &along(r, 0), behind.data(), ahead.data());
+  return extreme_down_columns(along, half, pick);
 }
 
 }  // namespace detail
