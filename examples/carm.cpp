@@ -6,7 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
-#include "gimm/geometry.hpp"
+#include "gimm/geometry/carm.hpp"
+#include "gimm/geometry/fundamental.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"
