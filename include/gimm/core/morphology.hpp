@@ -1,10 +1,9 @@
 #pragma once
-/// Grey-level morphology with square windows: running maxima and minima down the columns and
-/// along the rows (van Herk / Gil-Werman: three comparisons per pixel whatever the window's
-/// width), the closing
-/// built from them, and the black top-hat that keeps the dark structures narrower than the
-/// window. Windows are clipped to the image (for a maximum or a minimum the same as replicating
-/// the edge pixel), so a closing is never below its input.
+/// Grey-level morphology with square windows: running maxima and minima along the rows and down
+/// the columns (van Herk / Gil-Werman: three comparisons per pixel whatever the window's width),
+/// the closing built from them, and the black top-hat that keeps the dark structures narrower
+/// than the window. Windows are clipped to the image (for a maximum or a minimum the same as
+/// replicating the edge pixel), so a closing is never below its input.
 #include <algorithm>
 #include <cstddef>
 #include <vector>
