@@ -502,3 +502,95 @@ TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {
   const auto found = gimm::geometric_matches(v_across, v_along, o);
   CHECK(found.size() <= 3);
 }
+
+namespace {
+
+/// A straight chain from p to q, one point per pixel.
+gimm::Branch2d straight_chain(Eigen::Vector2d p, Eigen::Vector2d q) {
+  gimm::Branch2d b;
+  const int n = static_cast<int>(std::ceil((q - p).norm()));
+  for (int k = 0; k <= n; ++k) {
+    b.points.push_back(p + (q - p) * (double(k) / n));
+    b.radius_px.push_back(2.0);
+  }
+  return b;
+}
+
+/// Matches every 2 px along chain `c` of `g`, triangulating at `world` (the same point for all:
+/// only the ends' points matter to the tree prior).
+void add_chain_matches(const gimm::CenterlineGraph2d& g, int c, const Eigen::Vector3d& world,
+                       std::vector<gimm::GeometricMatch>& out) {
+  const auto& points = g.branches[static_cast<std::size_t>(c)].points;
+  for (std::size_t k = 0; k < points.size(); k += 2) {
+    gimm::GeometricMatch m;
+    m.a = points[k];
+    m.b = points[k];
+    m.world = world;
+    m.branch = c;
+    m.sample = static_cast<int>(k / 2);
+    out.push_back(m);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Tree prior: a chain whose junction disagrees in depth with all it meets is off",
+          "[match][geometric]") {
+  gimm::CenterlineGraph2d g;
+  g.rows = g.cols = 256;
+  // A bifurcation at (50, 80): parent 0, children 1 and 2 (their ends 2.2 px from the parent's).
+  g.branches.push_back(straight_chain({50, 50}, {50, 80}));
+  g.branches.push_back(straight_chain({51, 82}, {70, 100}));
+  g.branches.push_back(straight_chain({49, 82}, {30, 100}));
+  // A crossing at (150, 50) of two vessels at different depths: 3 continues into 5, 4 into 6.
+  g.branches.push_back(straight_chain({150, 20}, {150, 48}));
+  g.branches.push_back(straight_chain({120, 50}, {148, 50}));
+  g.branches.push_back(straight_chain({150, 52}, {150, 80}));
+  g.branches.push_back(straight_chain({152, 50}, {180, 50}));
+  // A chain that meets nothing.
+  g.branches.push_back(straight_chain({200, 200}, {220, 220}));
+  gimm::GeometricOptions o;  // junction_mm 5, junction_px 4
+  const Eigen::Vector3d near(0, 0, 0), deep(0, 0, 30);
+  std::vector<gimm::GeometricMatch> m;
+  add_chain_matches(g, 0, near, m);
+  add_chain_matches(g, 1, near + Eigen::Vector3d(2, 1, 0), m);  // 2.2 mm off: agrees
+  add_chain_matches(g, 2, deep, m);                            // 30 mm deeper: off the tree
+  add_chain_matches(g, 3, near, m);
+  add_chain_matches(g, 4, deep, m);
+  add_chain_matches(g, 5, near + Eigen::Vector3d(0, 0, 4), m);  // 4 mm: agrees with 3
+  add_chain_matches(g, 6, deep, m);
+  add_chain_matches(g, 7, deep, m);
+  const std::vector<bool> off = gimm::detail::off_tree_chains(g, m, o);
+  CHECK(off == std::vector<bool>{false, false, true, false, false, false, false, false});
+  // Wider tolerance: the deep child agrees; narrower: chain 5 no longer agrees with 3.
+  o.junction_mm = 40;
+  CHECK(gimm::detail::off_tree_chains(g, m, o)[2] == false);
+  o.junction_mm = 3;
+  CHECK(gimm::detail::off_tree_chains(g, m, o)[5] == true);
+  // A junction is judged by the matches at the chain's end: with the deep child's first
+  // matches dropped (the nearest now 8 px from its end, beyond junction_reach_px), it meets
+  // nothing and stays on.
+  o.junction_mm = 5;
+  std::vector<gimm::GeometricMatch> trimmed;
+  for (const auto& x : m)
+    if (x.branch != 2 || x.sample >= 4) trimmed.push_back(x);
+  CHECK(gimm::detail::off_tree_chains(g, trimmed, o)[2] == false);
+  // A match naming a chain the graph does not have is a caller's bug, said so.
+  m.back().branch = 8;
+  CHECK_THROWS_WITH(gimm::detail::off_tree_chains(g, m, o), Catch::Contains("chain 8 of 8"));
+}
+
+TEST_CASE("Tree prior: bad options are refused", "[match][geometric]") {
+  const int size = 64;
+  const gimm::Camerad ca = carm_camera(30, 0, size), cb = carm_camera(-30, 0, size);
+  gimm::GeometricOptions o;
+  const Eigen::Vector3d iso = gimm::pair_isocentre(ca, cb);
+  const gimm::Image<std::uint8_t> empty(size, size, 0);
+  const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
+  const auto vb = gimm::vessel_view(nullptr, &empty, cb, iso, o);
+  for (const auto& [mm, px, reach] : {std::tuple{-1.0, 4.0, 6.0}, {5.0, 0.0, 6.0},
+                                      {5.0, 4.0, -1.0}, {std::nan(""), 4.0, 6.0}}) {
+    o.junction_mm = mm, o.junction_px = px, o.junction_reach_px = reach;
+    CHECK_THROWS_WITH(gimm::geometric_matches(va, vb, o), Catch::Contains("junction_mm"));
+  }
+}
