@@ -360,6 +360,10 @@ int main(int argc, char** argv) {
   app.add_option("--tolerance", geometric.epipolar_tolerance_px,
                  "geometric: epipolar tolerance, px (calibration error of real C-arms)")
       ->capture_default_str();
+  app.add_option("--junction-mm", geometric.junction_mm,
+                 "geometric, segmenting: tree prior, how far in 3D the matches of two chains "
+                 "meeting in A may be, mm (0 = off)")
+      ->capture_default_str();
   app.add_option("--order-cost", geometric.w_order,
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
       ->capture_default_str();
@@ -458,6 +462,7 @@ int main(int argc, char** argv) {
     // A flag of one method given to another would be silently ignored: refuse it instead.
     const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
                                                                 {"--order-cost", "geometric"},
+                                                                {"--junction-mm", "geometric"},
                                                                 {"--segment", "geometric"},
                                                                 {"--exact-vesselness", "geometric"},
                                                                 {"--sigma", "oracle"},
@@ -477,6 +482,8 @@ int main(int argc, char** argv) {
     GIMM_CHECK(app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
                "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
                "(without it the matcher uses the vessel masks)");
+    // Every mode segments with it: a dataset (--segment), a pair of images, a pair of DICOMs.
+    geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
     if (!dataset.empty()) {
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
                      dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&
@@ -496,7 +503,6 @@ int main(int argc, char** argv) {
                    "cameras), got --geometry "
                        << geometry);
         geometric.use_masks = !segment;
-        geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
         matcher = std::make_unique<gimm::GeometricMatcher>(geometric);
       } else {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);

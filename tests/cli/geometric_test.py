@@ -119,8 +119,12 @@ cases = [
     ("gate for the geometric matcher", [*pair, "--delta", 5], "--delta is for --method learned"),
     ("ordering for the learned matcher", ["--dataset", ds, "--order-cost", 1],
      "--order-cost is for --method geometric, not learned"),
+    ("tree prior for the learned matcher", ["--dataset", ds, "--junction-mm", 5],
+     "--junction-mm is for --method geometric, not learned"),
     ("negative ordering cost", [*pair, "--order-cost", -1], "ordering cost must be finite and >= 0, got -1"),
     ("nan ordering cost", [*pair, "--order-cost", "nan"], "--order-cost: must be a finite number, got nan"),
+    ("negative tree prior", [*pair, "--junction-mm", -1], "junction_mm must be >= 0"),
+    ("nan tree prior", [*pair, "--junction-mm", "nan"], "--junction-mm: must be a finite number, got nan"),
     ("sigma for the learned matcher", ["--dataset", ds, "--sigma", 2], "--sigma is for --method oracle"),
 ]
 for name, args, needle in cases:

@@ -225,7 +225,9 @@ class Matching(unittest.TestCase):
             prefixes[1] + ".camera.json", "--out", out, *extra)
         reference = gimm.read_matches(out)
         mine = gimm.match_geometric(*images, *cameras, exact_vesselness=bool(extra))
-        self.assertGreater(len(reference["confidence"]), 10, extra)
+        # 8 matches fast, 10 exact since the tree prior (29-30 before); on this pair most of them
+        # join rib edges of the two views, so this compares the two front ends, not accuracy.
+        self.assertGreaterEqual(len(reference["confidence"]), 5, extra)
         for key in ("points_a", "points_b", "confidence", "F"):
             np.testing.assert_allclose(mine[key], reference[key], rtol=1e-12, atol=1e-12,
                                        err_msg=f"{key} {extra}")
@@ -241,12 +243,8 @@ class Matching(unittest.TestCase):
     def test_geometric_same_matches_as_gimm_match(self):
         self.geometric_same_as_gimm_match()
 
-    # A known defect, kept visible: with --exact-vesselness on this pair the Python module finds
-    # 30 matches and gimm-match 29 (each deterministic; the fast path agrees exactly). Found
-    # 2026-12-05 with the background removal, whose low hysteresis threshold (0.002) lets
-    # float-level differences decide pixels; which difference between the two builds is not
-    # yet known. An unexpected success here means it is fixed.
-    @unittest.expectedFailure
+    # The reference kernels in both. (gimm-match used to apply --exact-vesselness only with
+    # --dataset: on one pair it ran the fast kernels, 29 matches against the module's 30.)
     def test_geometric_exact_vesselness_same_matches_as_gimm_match(self):
         self.geometric_same_as_gimm_match("--exact-vesselness")
 
