@@ -554,7 +554,7 @@ TEST_CASE("Tree prior: a chain whose junction disagrees in depth with all it mee
   std::vector<gimm::GeometricMatch> m;
   add_chain_matches(g, 0, near, m);
   add_chain_matches(g, 1, near + Eigen::Vector3d(2, 1, 0), m);  // 2.2 mm off: agrees
-  add_chain_matches(g, 2, deep, m);                            // 30 mm deeper: off the tree
+  add_chain_matches(g, 2, deep, m);                             // 30 mm deeper: off the tree
   add_chain_matches(g, 3, near, m);
   add_chain_matches(g, 4, deep, m);
   add_chain_matches(g, 5, near + Eigen::Vector3d(0, 0, 4), m);  // 4 mm: agrees with 3
@@ -588,8 +588,8 @@ TEST_CASE("Tree prior: bad options are refused", "[match][geometric]") {
   const gimm::Image<std::uint8_t> empty(size, size, 0);
   const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
   const auto vb = gimm::vessel_view(nullptr, &empty, cb, iso, o);
-  for (const auto& [mm, px, reach] : {std::tuple{-1.0, 4.0, 6.0}, {5.0, 0.0, 6.0},
-                                      {5.0, 4.0, -1.0}, {std::nan(""), 4.0, 6.0}}) {
+  for (const auto& [mm, px, reach] :
+       {std::tuple{-1.0, 4.0, 6.0}, {5.0, 0.0, 6.0}, {5.0, 4.0, -1.0}, {std::nan(""), 4.0, 6.0}}) {
     o.junction_mm = mm, o.junction_px = px, o.junction_reach_px = reach;
     CHECK_THROWS_WITH(gimm::geometric_matches(va, vb, o), Catch::Contains("junction_mm"));
   }
