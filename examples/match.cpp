@@ -16,6 +16,7 @@
 //              [--out m.json] [--picture p.png] [--tree t.json] [--tree-vtk t.vtk]
 // Single pair, either method: --tree/--tree-vtk write the matches triangulated with both cameras
 // (match/reconstruct.hpp; the learned matcher's dropped past --max-reprojection).
+// The matchers themselves are in examples/match/ (methods.hpp), one file each.
 // DICOM (io/dicom.hpp, docs/dicom.md): images and cameras from the files' tags, B's table
 // relative to A's; view classes from the angles unless --class-a/b; real C-arm geometry is off
 // by a few px, so the gate (--delta) and the geometric tolerance default to 5 px there.
@@ -50,72 +51,12 @@
 #include "gimm/labels/views.hpp"
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/geometric.hpp"
-#include "gimm/match/learned.hpp"
+#include "gimm/match/learned_options.hpp"
 #include "gimm/match/matches.hpp"
-#include "gimm/match/reconstruct.hpp"
-#include "gimm/nn/matcher_file.hpp"
 #include "gimm/render/image_degradation.hpp"
+#include "match/methods.hpp"
 
 namespace {
-
-void draw_line(gimm::Image<gimm::Rgb8>& canvas, Eigen::Vector2d a, Eigen::Vector2d b,
-               gimm::Rgb8 colour) {
-  const int steps = std::max(1, int(std::ceil((b - a).cwiseAbs().maxCoeff())));
-  for (int s = 0; s <= steps; ++s) {
-    const Eigen::Vector2d p = a + (b - a) * (double(s) / steps);
-    const int r = int(std::lround(p.y())), c = int(std::lround(p.x()));
-    if (r >= 0 && r < canvas.rows() && c >= 0 && c < canvas.cols()) canvas(r, c) = colour;
-  }
-}
-
-/// The line l (l1 u + l2 v + l3 = 0) across an image of `cols` x `rows`, shifted by `offset`.
-void draw_epipolar_line(gimm::Image<gimm::Rgb8>& canvas, const Eigen::Vector3d& l, int rows,
-                        int cols, double offset, gimm::Rgb8 colour) {
-  std::vector<Eigen::Vector2d> ends;  // where the line meets the image's border
-  if (std::abs(l.y()) > 1e-12)
-    for (double u : {-0.5, cols - 0.5}) {
-      const double v = -(l.x() * u + l.z()) / l.y();
-      if (v >= -0.5 && v <= rows - 0.5) ends.emplace_back(u, v);
-    }
-  if (std::abs(l.x()) > 1e-12)
-    for (double v : {-0.5, rows - 0.5}) {
-      const double u = -(l.y() * v + l.z()) / l.x();
-      if (u >= -0.5 && u <= cols - 0.5) ends.emplace_back(u, v);
-    }
-  if (ends.size() >= 2)
-    draw_line(canvas, ends[0] + Eigen::Vector2d(offset, 0), ends[1] + Eigen::Vector2d(offset, 0),
-              colour);
-}
-
-/// A and B side by side, each match a line from A to B, green (confident) to red; with an F,
-/// the epipolar lines in B of the five most confident matches, in blue.
-void write_picture(const std::string& path, const gimm::Image<float>& a,
-                   const gimm::Image<float>& b, const gimm::PairMatches& matches) {
-  gimm::Image<gimm::Rgb8> canvas(std::max(a.rows(), b.rows()), a.cols() + b.cols());
-  for (int r = 0; r < canvas.rows(); ++r)
-    for (int c = 0; c < canvas.cols(); ++c) {
-      const bool in_a = c < a.cols();
-      const gimm::Image<float>& img = in_a ? a : b;
-      const int col = in_a ? c : c - a.cols();
-      const float v = r < img.rows() ? img(r, col) : 0.0f;
-      const auto g = static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
-      canvas(r, c) = {g, g, g};
-    }
-  if (matches.F)
-    for (std::size_t k : gimm::rank_by_confidence(matches.confidence, 5))
-      draw_epipolar_line(canvas, *matches.F * matches.points_a[k].homogeneous(), b.rows(), b.cols(),
-                         double(a.cols()), {60, 120, 255});
-  double top = 0;
-  for (double c : matches.confidence) top = std::max(top, c);
-  for (std::size_t k = 0; k < matches.size(); ++k) {
-    const double t = top > 0 ? matches.confidence[k] / top : 0.0;
-    const gimm::Rgb8 colour{static_cast<std::uint8_t>(255 * (1 - t)),
-                            static_cast<std::uint8_t>(255 * t), 40};
-    draw_line(canvas, matches.points_a[k],
-              matches.points_b[k] + Eigen::Vector2d(double(a.cols()), 0.0), colour);
-  }
-  gimm::write_png(path, canvas);
-}
 
 std::optional<gimm::Camerad> read_camera(const std::string& path) {
   if (path.empty()) return std::nullopt;
@@ -211,103 +152,6 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
         "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
         "matches, or a degenerate fit); those pairs are not gated\n",
         counts.without_F, ids.size(), estimate_from);
-  return 0;
-}
-
-/// The matches with their triangulated points: JSON (gimm-tree/1) and VTK polydata, lines
-/// joining consecutive samples of one A branch.
-void write_tree(const std::string& json_path, const std::string& vtk_path,
-                const std::vector<gimm::GeometricMatch>& matches) {
-  if (!json_path.empty()) {
-    nlohmann::json points = nlohmann::json::array();
-    for (const auto& m : matches)
-      points.push_back({{"a", {m.a.x(), m.a.y()}},
-                        {"b", {m.b.x(), m.b.y()}},
-                        {"world_mm", {m.world.x(), m.world.y(), m.world.z()}},
-                        {"confidence", m.confidence},
-                        {"consistent", m.consistent},
-                        {"branch", m.branch}});
-    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"}, {"points", points}});
-  }
-  if (!vtk_path.empty()) {
-    std::vector<Eigen::Vector3d> points;
-    std::vector<std::pair<std::size_t, std::size_t>> lines;
-    for (std::size_t k = 0; k < matches.size(); ++k) {
-      points.push_back(matches[k].world);
-      if (k > 0 && matches[k].branch == matches[k - 1].branch &&
-          matches[k].sample == matches[k - 1].sample + 1)
-        lines.emplace_back(k - 1, k);
-    }
-    gimm::write_file_atomic(
-        vtk_path, gimm::vtk_polydata("gimm geometric matcher: triangulated centerline points, mm",
-                                     points, lines));
-  }
-}
-
-/// The learned matcher's matches triangulated: JSON (gimm-tree/1) and VTK points.
-void write_reconstruction(const std::string& json_path, const std::string& vtk_path,
-                          const gimm::Reconstruction& rec) {
-  if (!json_path.empty()) {
-    nlohmann::json points = nlohmann::json::array();
-    for (const auto& p : rec.points)
-      points.push_back({{"a", {p.a.x(), p.a.y()}},
-                        {"b", {p.b.x(), p.b.y()}},
-                        {"world_mm", {p.world.x(), p.world.y(), p.world.z()}},
-                        {"reprojection_px", {p.reprojection_a, p.reprojection_b}},
-                        {"confidence", p.confidence}});
-    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"},
-                                      {"points", points},
-                                      {"dropped_degenerate", rec.dropped_degenerate},
-                                      {"dropped_reprojection", rec.dropped_reprojection}});
-  }
-  if (!vtk_path.empty()) {
-    std::vector<Eigen::Vector3d> points;
-    for (const auto& p : rec.points) points.push_back(p.world);
-    gimm::write_file_atomic(vtk_path,
-                            gimm::vtk_polydata("gimm: triangulated matches, mm", points, {}));
-  }
-}
-
-/// One pair as the single-pair modes take it: from PNG + camera JSON files, or from DICOM.
-struct LoadedPair {
-  gimm::Image<float> a, b;
-  std::optional<gimm::Camerad> camera_a, camera_b;
-};
-
-int match_geometric_pair(const LoadedPair& loaded_pair, const std::string& pair,
-                         const gimm::GeometricOptions& options, const std::string& out,
-                         const std::string& picture, const std::string& tree,
-                         const std::string& tree_vtk, std::chrono::steady_clock::time_point start) {
-  GIMM_CHECK(loaded_pair.camera_a && loaded_pair.camera_b,
-             "--method geometric on one pair needs the cameras: --camera-a and --camera-b (or "
-             "--dicom-a and --dicom-b)");
-  const gimm::Image<float>& a = loaded_pair.a;
-  const gimm::Image<float>& b = loaded_pair.b;
-  gimm::PairInput input;
-  input.id = pair;
-  input.image_a = &a;
-  input.image_b = &b;
-  input.camera_a = loaded_pair.camera_a;
-  input.camera_b = loaded_pair.camera_b;
-  const auto loaded = std::chrono::steady_clock::now();
-  const std::vector<gimm::GeometricMatch> found =
-      gimm::GeometricMatcher(options).match_with_points(input);
-  const auto matched = std::chrono::steady_clock::now();
-  gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(pair, found);
-  matches.F = gimm::fundamental_from_cameras(*input.camera_a, *input.camera_b);
-  matches.F_source = "cameras";
-  // All or nothing: a failure (a full disk) leaves the files of an earlier run as they were.
-  gimm::write_all_or_nothing([&](const auto& at) {
-    if (!picture.empty()) write_picture(at(picture).string(), a, b, matches);
-    if (!out.empty()) gimm::write_matches(at(out), matches);
-    write_tree(at(tree).string(), at(tree_vtk).string(), found);
-  });
-  std::size_t consistent = 0;
-  for (const auto& m : found) consistent += m.consistent;
-  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
-  std::cout << "gimm-match: " << found.size() << " matches (geometric, " << consistent
-            << " consistent both ways); load " << ms(loaded - start) << " ms, match "
-            << ms(matched - loaded) << " ms\n";
   return 0;
 }
 
@@ -443,21 +287,20 @@ int main(int argc, char** argv) {
   return gimm::cli::run(app, argc, argv, [&] {
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
-    // The learned matcher's weights (given or shipped) and the input size they were trained at.
-    const auto load_network = [&] {
-      if (weights.empty()) weights = gimm::cli::default_weights();
-      gimm::nn::Matcher network = gimm::nn::load_matcher(weights);
-      if (threshold_flag->count()) network.set_threshold(threshold);
-      GIMM_CHECK(input_size >= 0, "--input-size must be >= 0, got " << input_size);
-      options.input_size = input_size_flag->count() ? input_size : network.config().input_size;
-      // The gate the weights were tuned with, where no flag says otherwise (real DICOM geometry
-      // keeps its own wider --delta default, set above).
-      gimm::GateChoice chosen;
-      if (app.count("--gate")) chosen.mode = options.gate.mode;
-      if (app.count("--delta") || !dicom_a.empty()) chosen.delta_px = options.gate.delta_px;
-      if (app.count("--snap")) chosen.snap = options.snap_to_epipolar;
-      gimm::apply_gate_choice(network.config(), chosen, options);
-      return network;
+    // The learned matcher's weights (given or shipped) and the flags given for it; what no flag
+    // sets comes from the weights' record (examples/match/learned.cpp).
+    const auto learned_choice = [&] {
+      gimm_match::LearnedChoice choice;
+      choice.weights = weights.empty() ? gimm::cli::default_weights() : weights;
+      if (threshold_flag->count()) choice.threshold = threshold;
+      if (input_size_flag->count()) choice.input_size = input_size;
+      // Real DICOM geometry keeps its own wider --delta default, set below.
+      if (app.count("--gate")) choice.gate.mode = options.gate.mode;
+      if (app.count("--delta") || !dicom_a.empty()) choice.gate.delta_px = options.gate.delta_px;
+      if (app.count("--snap")) choice.gate.snap = options.snap_to_epipolar;
+      choice.gate_name = gate;
+      choice.max_reprojection = max_reprojection;
+      return choice;
     };
     // A flag of one method given to another would be silently ignored: refuse it instead.
     const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
@@ -494,8 +337,7 @@ int main(int argc, char** argv) {
       GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
       std::unique_ptr<gimm::PairMatcher> matcher;
       if (method == "learned") {
-        gimm::nn::Matcher network = load_network();
-        matcher = std::make_unique<gimm::LearnedMatcher>(std::move(network), options);
+        matcher = gimm_match::learned_matcher(learned_choice(), options);
       } else if (method == "geometric") {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not geometric");
         GIMM_CHECK(geometry == "cameras",
@@ -503,7 +345,7 @@ int main(int argc, char** argv) {
                    "cameras), got --geometry "
                        << geometry);
         geometric.use_masks = !segment;
-        matcher = std::make_unique<gimm::GeometricMatcher>(geometric);
+        matcher = gimm_match::geometric_matcher(geometric);
       } else {
         GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
         GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
@@ -532,7 +374,7 @@ int main(int argc, char** argv) {
       GIMM_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
     GIMM_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,
                "--max-reprojection must be > 0 px, got " << max_reprojection);
-    LoadedPair loaded_pair;
+    gimm_match::LoadedPair loaded_pair;
     if (!dicom_a.empty() || !dicom_b.empty()) {
       GIMM_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty(),
@@ -582,42 +424,13 @@ int main(int argc, char** argv) {
       loaded_pair = {gimm::read_png_unit(image_a), gimm::read_png_unit(image_b),
                      read_camera(camera_a), read_camera(camera_b)};
     }
+    const gimm_match::PairOutputs outputs{pair, out, picture, tree, tree_vtk, start};
     if (method == "geometric")
-      return match_geometric_pair(loaded_pair, pair, geometric, out, picture, tree, tree_vtk,
-                                  start);
+      return gimm_match::match_geometric_pair(loaded_pair, geometric, outputs);
     GIMM_CHECK(method == "learned", "--method " << method
                                                 << " matches a dataset's pairs (it needs their "
                                                    "masks or labels): give --dataset DIR");
-    GIMM_CHECK((tree.empty() && tree_vtk.empty()) || loaded_pair.camera_a,
-               "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
-    const gimm::nn::Matcher matcher = load_network();
-    const gimm::Image<float>& a = loaded_pair.a;
-    const gimm::Image<float>& b = loaded_pair.b;
-    const auto loaded = std::chrono::steady_clock::now();
-    gimm::PairMatchResult result = gimm::match_pair(
-        matcher, a, b, class_a, class_b, loaded_pair.camera_a, loaded_pair.camera_b, options);
-    const auto matched = std::chrono::steady_clock::now();
-    result.matches.pair = pair;
-    std::optional<gimm::Reconstruction> rec;
-    if (!tree.empty() || !tree_vtk.empty())
-      rec = gimm::reconstruct_matches(
-          result.matches, *loaded_pair.camera_a, *loaded_pair.camera_b,
-          max_reprojection > 0 ? max_reprojection : options.gate.delta_px);
-    gimm::write_all_or_nothing([&](const auto& at) {  // as in match_geometric_pair
-      if (!picture.empty()) write_picture(at(picture).string(), a, b, result.matches);
-      if (!out.empty()) gimm::write_matches(at(out), result.matches);
-      if (rec) write_reconstruction(at(tree).string(), at(tree_vtk).string(), *rec);
-    });
-    const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
-    std::cout << "gimm-match: " << result.matches.size() << " matches (network "
-              << result.network_matches << ", in padding " << result.dropped_in_padding
-              << ", gated out " << result.dropped_by_gate << "; F from "
-              << result.fundamental_source << ", gate " << gate << "); load " << ms(loaded - start)
-              << " ms, match " << ms(matched - loaded) << " ms\n";
-    if (rec)
-      std::cout << "gimm-match: " << rec->points.size() << " points triangulated ("
-                << rec->dropped_reprojection << " dropped past the reprojection limit, "
-                << rec->dropped_degenerate << " degenerate)\n";
-    return 0;
+    return gimm_match::match_learned_pair(learned_choice(), options, loaded_pair, class_a, class_b,
+                                          outputs);
   });
 }

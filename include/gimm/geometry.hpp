@@ -5,5 +5,6 @@
 #include "gimm/geometry/carm.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/fundamental.hpp"
+#include "gimm/geometry/gate_options.hpp"
 #include "gimm/geometry/gating.hpp"
 #include "gimm/geometry/triangulation.hpp"

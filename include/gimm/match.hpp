@@ -6,6 +6,7 @@
 #include "gimm/match/centerline_graph.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/learned.hpp"
+#include "gimm/match/learned_options.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/match/vesselness.hpp"

@@ -26,6 +26,7 @@
 #include "gimm/core/volume.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/match/matches.hpp"
 
 namespace gimm::python {
 
@@ -448,12 +449,17 @@ inline py::dict truth_dict(const PairTruth& t) {
 /// A Camera, or a CArm's camera (a CArm given where a camera is expected).
 Camerad camera_of(const py::handle& obj, const std::string& name);
 
+/// Matches as the module returns them: dict(points_a, points_b, confidence, F, F_source, pair).
+py::dict matches_dict(PairMatches m);
+
 // ---- the parts of the module, one per source file -----------------------------------------
 
 void bind_geometry(py::module_& m);
+void bind_epipolar(py::module_& m);  // F, epipolar distances, gating, triangulation
 void bind_volumes(py::module_& m);  // files, the phantom, anatomy, the view protocol
 void bind_render(py::module_& m);   // the renderer, per-view and per-pair labels
-void bind_match(py::module_& m);    // the learned matcher, metrics
+void bind_match(py::module_& m);    // the learned matcher, baselines, metrics
+void bind_geometric(py::module_& m);  // the geometric matcher
 void bind_dataset(py::module_& m);  // gimm-dataset folders
 void bind_dicom(py::module_& m);    // XA DICOM (built with GDCM only)
 

@@ -1,6 +1,5 @@
-// gimm.Matcher (the learned matcher, match/learned.hpp), match_geometric (the training-free
-// matcher, match/geometric.hpp) and the evaluation protocol
-// (metrics/protocol.hpp, summary.hpp, user_truth.hpp).
+// gimm.Matcher (the learned matcher, match/learned.hpp), the baselines and the evaluation
+// protocol (metrics/protocol.hpp, summary.hpp, user_truth.hpp). match_geometric: geometric.cpp.
 #include <pybind11/stl.h>
 
 #include <cstdlib>
@@ -8,7 +7,6 @@
 
 #include "common.hpp"
 #include "gimm/match/baselines.hpp"
-#include "gimm/match/geometric.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/metrics/protocol.hpp"
@@ -123,16 +121,6 @@ PairMatches matches_from(const py::handle& obj, const std::string& name) {
   return m;
 }
 
-py::dict matches_dict(PairMatches m) {
-  py::dict d;
-  d["points_a"] = rows_to_numpy<2>(m.points_a);
-  d["points_b"] = rows_to_numpy<2>(m.points_b);
-  d["confidence"] = adopt_vector(std::move(m.confidence));
-  d["F"] = m.F ? py::object(to_numpy(*m.F)) : py::object(py::none());
-  d["F_source"] = m.F_source;
-  d["pair"] = m.pair;
-  return d;
-}
 
 /// A list of dicts, or one dict as a list of one.
 std::vector<py::object> list_of(const py::handle& obj) {
@@ -147,6 +135,17 @@ std::vector<py::object> list_of(const py::handle& obj) {
 }
 
 }  // namespace
+
+py::dict matches_dict(PairMatches m) {
+  py::dict d;
+  d["points_a"] = rows_to_numpy<2>(m.points_a);
+  d["points_b"] = rows_to_numpy<2>(m.points_b);
+  d["confidence"] = adopt_vector(std::move(m.confidence));
+  d["F"] = m.F ? py::object(to_numpy(*m.F)) : py::object(py::none());
+  d["F_source"] = m.F_source;
+  d["pair"] = m.pair;
+  return d;
+}
 
 void bind_match(py::module_& m) {
   py::class_<nn::Matcher>(m, "Matcher", R"doc(
@@ -220,63 +219,6 @@ Returns dict(points_a, points_b (N, 2) pixels (u, v) with centres at integers, c
 F (3, 3) with x_b^T F x_a = 0 or None, F_source 'cameras' | 'matches' | 'none',
 network_matches, dropped_in_padding, dropped_by_gate). The images are copied into gimm's
 storage; the GIL is released while matching.)doc");
-
-  m.def(
-      "match_geometric",
-      [](const py::handle& image_a, const py::handle& image_b, const py::handle& camera_a,
-         const py::handle& camera_b, const py::object& mask_a, const py::object& mask_b,
-         double tolerance_px, bool exact_vesselness) {
-        if (mask_a.is_none() != mask_b.is_none())
-          throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
-        const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
-        const Image<float> b = image_from<float>(image_b, Accept::floating, "image_b");
-        PairTruth masks;
-        if (!mask_a.is_none()) {
-          masks.mask_a = std::make_shared<Image<std::uint8_t>>(
-              image_from<std::uint8_t>(mask_a, Accept::mask, "mask_a"));
-          masks.mask_b = std::make_shared<Image<std::uint8_t>>(
-              image_from<std::uint8_t>(mask_b, Accept::mask, "mask_b"));
-        }
-        PairInput input;
-        input.id = "pair";
-        input.image_a = &a;
-        input.image_b = &b;
-        input.camera_a = camera_of(camera_a, "camera_a");
-        input.camera_b = camera_of(camera_b, "camera_b");
-        input.truth = mask_a.is_none() ? nullptr : &masks;
-        GeometricOptions o;
-        o.epipolar_tolerance_px = tolerance_px;
-        o.segmentation.vesselness.exact_derivatives = exact_vesselness;
-        std::vector<GeometricMatch> found;
-        {
-          py::gil_scoped_release release;
-          found = GeometricMatcher(o).match_with_points(input);
-        }
-        PairMatches matches = GeometricMatcher::to_pair_matches("", found);
-        matches.F = fundamental_from_cameras(*input.camera_a, *input.camera_b);
-        matches.F_source = "cameras";
-        std::vector<Eigen::Vector3d> world;
-        for (const auto& g : found) world.push_back(g.world);
-        py::dict d = matches_dict(std::move(matches));
-        d.attr("pop")("pair");
-        d["world_mm"] = rows_to_numpy<3>(world);
-        return d;
-      },
-      py::arg("image_a"), py::arg("image_b"), py::arg("camera_a"), py::arg("camera_b"),
-      py::kw_only(), py::arg("mask_a") = py::none(), py::arg("mask_b") = py::none(),
-      py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false, R"doc(
-The training-free geometric matcher (docs/geometric-matcher.md), as gimm-match --method geometric
-does for one pair: vessels segmented from the images (or the masks given), 2D centerlines, and a
-dynamic programme along each centerline over the crossings of its epipolar lines, both ways.
-
-image_a, image_b: float (rows, cols) in [0, 1], dark vessels on a bright background. camera_a,
-camera_b: Camera or CArm, each for its image's size (required: the matcher is geometry).
-mask_a, mask_b: optional vessel masks (nonzero = vessel), both or neither; without them the
-images are segmented. tolerance_px: the epipolar tolerance (calibration error of real C-arms).
-exact_vesselness: the slow reference kernels instead of the fast ones.
-Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the DP margin),
-world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras, F_source
-'cameras'). The GIL is released while matching.)doc");
 
   m.def(
       "match_baseline",

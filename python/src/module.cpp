@@ -67,9 +67,11 @@ PYBIND11_MODULE(_gimm, m) {
         "Threads gimm's parallel loops use for calls from this Python thread.");
 
   gimm::python::bind_geometry(m);
+  gimm::python::bind_epipolar(m);
   gimm::python::bind_volumes(m);
   gimm::python::bind_render(m);
   gimm::python::bind_match(m);
+  gimm::python::bind_geometric(m);
   gimm::python::bind_dataset(m);
 #ifdef GIMM_PYTHON_HAVE_DICOM
   gimm::python::bind_dicom(m);

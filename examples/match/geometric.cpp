@@ -1,0 +1,87 @@
+// gimm-match's geometric matcher (match/geometric.hpp): over a dataset, or one pair with its
+// triangulated tree (examples/match/methods.hpp).
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "gimm/geometry/epipolar.hpp"
+#include "gimm/io/files.hpp"
+#include "gimm/match/geometric.hpp"
+#include "gimm/match/reconstruct.hpp"
+#include "methods.hpp"
+
+namespace gimm_match {
+
+namespace {
+
+/// The matches with their triangulated points: JSON (gimm-tree/1) and VTK polydata, lines
+/// joining consecutive samples of one A branch.
+void write_tree(const std::string& json_path, const std::string& vtk_path,
+                const std::vector<gimm::GeometricMatch>& matches) {
+  if (!json_path.empty()) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& m : matches)
+      points.push_back({{"a", {m.a.x(), m.a.y()}},
+                        {"b", {m.b.x(), m.b.y()}},
+                        {"world_mm", {m.world.x(), m.world.y(), m.world.z()}},
+                        {"confidence", m.confidence},
+                        {"consistent", m.consistent},
+                        {"branch", m.branch}});
+    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"}, {"points", points}});
+  }
+  if (!vtk_path.empty()) {
+    std::vector<Eigen::Vector3d> points;
+    std::vector<std::pair<std::size_t, std::size_t>> lines;
+    for (std::size_t k = 0; k < matches.size(); ++k) {
+      points.push_back(matches[k].world);
+      if (k > 0 && matches[k].branch == matches[k - 1].branch &&
+          matches[k].sample == matches[k - 1].sample + 1)
+        lines.emplace_back(k - 1, k);
+    }
+    gimm::write_file_atomic(
+        vtk_path, gimm::vtk_polydata("gimm geometric matcher: triangulated centerline points, mm",
+                                     points, lines));
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<gimm::PairMatcher> geometric_matcher(const gimm::GeometricOptions& options) {
+  return std::make_unique<gimm::GeometricMatcher>(options);
+}
+
+int match_geometric_pair(const LoadedPair& pair, const gimm::GeometricOptions& options,
+                         const PairOutputs& outputs) {
+  GIMM_CHECK(pair.camera_a && pair.camera_b,
+             "--method geometric on one pair needs the cameras: --camera-a and --camera-b (or "
+             "--dicom-a and --dicom-b)");
+  const gimm::Image<float>& a = pair.a;
+  const gimm::Image<float>& b = pair.b;
+  gimm::PairInput input;
+  input.id = outputs.pair;
+  input.image_a = &a;
+  input.image_b = &b;
+  input.camera_a = pair.camera_a;
+  input.camera_b = pair.camera_b;
+  const auto loaded = std::chrono::steady_clock::now();
+  const std::vector<gimm::GeometricMatch> found =
+      gimm::GeometricMatcher(options).match_with_points(input);
+  const auto matched = std::chrono::steady_clock::now();
+  gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(outputs.pair, found);
+  matches.F = gimm::fundamental_from_cameras(*input.camera_a, *input.camera_b);
+  matches.F_source = "cameras";
+  // All or nothing: a failure (a full disk) leaves the files of an earlier run as they were.
+  gimm::write_all_or_nothing([&](const auto& at) {
+    if (!outputs.picture.empty()) write_picture(at(outputs.picture).string(), a, b, matches);
+    if (!outputs.out.empty()) gimm::write_matches(at(outputs.out), matches);
+    write_tree(at(outputs.tree).string(), at(outputs.tree_vtk).string(), found);
+  });
+  std::size_t consistent = 0;
+  for (const auto& m : found) consistent += m.consistent;
+  const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  std::cout << "gimm-match: " << found.size() << " matches (geometric, " << consistent
+            << " consistent both ways); load " << ms(loaded - outputs.start) << " ms, match "
+            << ms(matched - loaded) << " ms\n";
+  return 0;
+}
+
+}  // namespace gimm_match
