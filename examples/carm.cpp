@@ -7,7 +7,7 @@
 
 #include "cli_common.hpp"
 #include "gimm/geometry/carm.hpp"
-#include "gimm/geometry/fundamental.hpp"
+#include "gimm/geometry/epipolar.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"

@@ -458,7 +458,8 @@ void bind_geometry(py::module_& m);
 void bind_epipolar(py::module_& m);  // F, epipolar distances, gating, triangulation
 void bind_volumes(py::module_& m);  // files, the phantom, anatomy, the view protocol
 void bind_render(py::module_& m);   // the renderer, per-view and per-pair labels
-void bind_match(py::module_& m);    // the learned matcher, baselines, metrics
+void bind_learned(py::module_& m);  // the learned matcher
+void bind_match(py::module_& m);    // baselines, metrics
 void bind_geometric(py::module_& m);  // the geometric matcher
 void bind_dataset(py::module_& m);  // gimm-dataset folders
 void bind_dicom(py::module_& m);    // XA DICOM (built with GDCM only)

@@ -70,6 +70,7 @@ PYBIND11_MODULE(_gimm, m) {
   gimm::python::bind_epipolar(m);
   gimm::python::bind_volumes(m);
   gimm::python::bind_render(m);
+  gimm::python::bind_learned(m);
   gimm::python::bind_match(m);
   gimm::python::bind_geometric(m);
   gimm::python::bind_dataset(m);
