@@ -6,7 +6,7 @@
 #include "gimm/core/rng.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/carm.hpp"
-#include "gimm/geometry/fundamental.hpp"
+#include "gimm/geometry/epipolar.hpp"
 
 namespace gimm_test {
 
@@ -23,7 +23,7 @@ inline gimm::CArm carm_pose(double primary, double secondary,
 /// and their pixels in cameras a and b.
 struct PairScene {
   std::vector<Eigen::Vector3d> world;
-  gimm::Points2<double> x_a, x_b;
+  Eigen::Matrix2Xd x_a, x_b;
 };
 
 inline PairScene make_pair_scene(const gimm::Camerad& a, const gimm::Camerad& b, int n,
@@ -43,8 +43,8 @@ inline PairScene make_pair_scene(const gimm::Camerad& a, const gimm::Camerad& b,
 }
 
 /// max_i |x_b^T F x_a| / (|x_b| |F| |x_a|) over homogeneous pixel coordinates.
-inline double max_relative_residual(const Eigen::Matrix3d& F, const gimm::Points2<double>& x_a,
-                                    const gimm::Points2<double>& x_b) {
+inline double max_relative_residual(const Eigen::Matrix3d& F, const Eigen::Matrix2Xd& x_a,
+                                    const Eigen::Matrix2Xd& x_b) {
   double worst = 0;
   for (Eigen::Index i = 0; i < x_a.cols(); ++i) {
     const Eigen::Vector3d ha = x_a.col(i).homogeneous(), hb = x_b.col(i).homogeneous();
@@ -54,8 +54,8 @@ inline double max_relative_residual(const Eigen::Matrix3d& F, const gimm::Points
 }
 
 /// max_i of the squared symmetric epipolar distance, px^2.
-inline double max_symmetric_sq(const Eigen::Matrix3d& F, const gimm::Points2<double>& x_a,
-                               const gimm::Points2<double>& x_b) {
+inline double max_symmetric_sq(const Eigen::Matrix3d& F, const Eigen::Matrix2Xd& x_a,
+                               const Eigen::Matrix2Xd& x_b) {
   double worst = 0;
   for (Eigen::Index i = 0; i < x_a.cols(); ++i)
     worst =

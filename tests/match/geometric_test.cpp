@@ -10,7 +10,7 @@
 #include <tuple>
 
 #include "gimm/geometry/carm.hpp"
-#include "gimm/geometry/fundamental.hpp"
+#include "gimm/geometry/epipolar.hpp"
 #include "gimm/match/geometric.hpp"
 
 namespace {
