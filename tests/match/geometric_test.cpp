@@ -477,6 +477,13 @@ TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {
   const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
   const auto vb = gimm::vessel_view(nullptr, &empty, cb, iso, o);
   CHECK(gimm::geometric_matches(va, vb, o).empty());
+  // Tree prior options out of range are refused, naming them.
+  for (const auto& [mm, px, reach] :
+       {std::tuple{-1.0, 4.0, 6.0}, {5.0, 0.0, 6.0}, {5.0, 4.0, -1.0}, {std::nan(""), 4.0, 6.0}}) {
+    gimm::GeometricOptions bad;
+    bad.junction_mm = mm, bad.junction_px = px, bad.junction_reach_px = reach;
+    CHECK_THROWS_WITH(gimm::geometric_matches(va, vb, bad), Catch::Contains("junction_mm"));
+  }
   const gimm::Image<float> flat(size, size, 0.5f);
   CHECK(gimm::vessel_view(&flat, nullptr, ca, iso, o).graph.branches.empty());
   // A camera made for another image size.
@@ -578,19 +585,4 @@ TEST_CASE("Tree prior: a chain whose junction disagrees in depth with all it mee
   // A match naming a chain the graph does not have is a caller's bug, said so.
   m.back().branch = 8;
   CHECK_THROWS_WITH(gimm::detail::off_tree_chains(g, m, o), Catch::Contains("chain 8 of 8"));
-}
-
-TEST_CASE("Tree prior: bad options are refused", "[match][geometric]") {
-  const int size = 64;
-  const gimm::Camerad ca = carm_camera(30, 0, size), cb = carm_camera(-30, 0, size);
-  gimm::GeometricOptions o;
-  const Eigen::Vector3d iso = gimm::pair_isocentre(ca, cb);
-  const gimm::Image<std::uint8_t> empty(size, size, 0);
-  const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
-  const auto vb = gimm::vessel_view(nullptr, &empty, cb, iso, o);
-  for (const auto& [mm, px, reach] :
-       {std::tuple{-1.0, 4.0, 6.0}, {5.0, 0.0, 6.0}, {5.0, 4.0, -1.0}, {std::nan(""), 4.0, 6.0}}) {
-    o.junction_mm = mm, o.junction_px = px, o.junction_reach_px = reach;
-    CHECK_THROWS_WITH(gimm::geometric_matches(va, vb, o), Catch::Contains("junction_mm"));
-  }
 }
