@@ -1,7 +1,8 @@
 // gimm-dataset: the DRR dataset (angiograms, masks, cameras, dense 3D-2D pair labels).
 //   gimm-dataset (--input DIR | --phantom COUNT) --out DIR [--seed S] [--phantom-size
 //   small|imagecas]
-//                [--view-mode shared|per_pair] [--shard I/N] [camera flags] [--recipe R]
+//                [--view-mode shared|per_pair | --views FILE] [--shard I/N] [camera flags]
+//                [--recipe R]
 //                [--allow-single-system] [--warn-dropped FRACTION] [--export reference]
 //   gimm-dataset merge --out DIR        joins the shard manifests of DIR into manifest.json
 // --input DIR is searched with its sub-folders for <id>.img<ext> + <id>.label<ext>.
@@ -20,9 +21,9 @@ int main(int argc, char** argv) {
   CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels", "gimm-dataset"};
   gimm::DatasetOptions options;
   gimm::cli::CArmFlags flags;
-  std::string input, out, shard_flag, view_mode = "shared", vessel_mode = "voxel",
-                                      recipe = "angiography", projector = "siddon",
-                                      phantom_size = "small";
+  std::string input, out, shard_flag, views_file, view_mode = "shared", vessel_mode = "voxel",
+                                                  recipe = "angiography", projector = "siddon",
+                                                  phantom_size = "small";
   int phantom_count = 0;
   bool quiet = false;
   std::string export_format;
@@ -40,6 +41,10 @@ int main(int argc, char** argv) {
   app.add_option("--view-mode", view_mode, "shared (11 renders) | per_pair (54 renders)")
       ->check(CLI::IsMember({"shared", "per_pair"}))
       ->capture_default_str();
+  app.add_option("--views", views_file,
+                 "gimm-views/1 JSON: view pairs placed on purpose instead of the protocol "
+                 "(docs/dataset.md)")
+      ->excludes("--view-mode");
   app.add_option("--recipe", recipe, "reference|angiography")
       ->check(CLI::IsMember({"reference", "angiography"}))
       ->capture_default_str();
@@ -94,6 +99,7 @@ int main(int argc, char** argv) {
                                      "the centerlines the isocentre); use gimm-drr for one view");
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
+    if (!views_file.empty()) options.listed_views = gimm::read_view_list(views_file);
     options.preset = gimm::parse_contrast_preset(recipe);
     options.projector = gimm::parse_projector(projector);
     options.vessel_mode = gimm::parse_vessel_mode(vessel_mode);

@@ -18,6 +18,7 @@ TOOLS = os.path.join(HERE, "..", "..", "tools", "atlas")
 sys.path.insert(0, TOOLS)
 import gate_sweep  # noqa: E402
 import pair_sweep  # noqa: E402
+import separation_views  # noqa: E402
 
 TMP = sys.argv[1]
 shutil.rmtree(TMP, ignore_errors=True)
@@ -95,6 +96,17 @@ if proc.returncode == 0:
     table = open(out + ".md").read()
     check("| 3-4 | 1 | 0.500 | 4.00 | 0.500 |" in table, f"pair_sweep table:\n{table}")
     check(os.path.getsize(out + ".png") > 1000, "pair_sweep: no chart")
+# Bins of one's own: the pair's crossings (3-4 above) fall in 2.9-9; bad edges refused.
+proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--by", "crossings",
+                       "--edges", "0,2.9,9", ds, out, "m=" + ev], capture_output=True, text=True)
+check(proc.returncode == 0 and "| 2.9-9 | 1 | 0.500 | 4.00 | 0.500 |" in open(out + ".md").read(),
+      f"pair_sweep --edges: exit {proc.returncode}, {proc.stderr[-300:]!r}")
+for edges in ["0,5,5", "10,0", "0,x"]:
+    proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--by",
+                           "crossings", "--edges", edges, ds, out, "m=" + ev],
+                          capture_output=True, text=True)
+    check(proc.returncode == 2 and f"'{edges}'" in proc.stderr,
+          f"pair_sweep --edges {edges}: exit {proc.returncode}, {proc.stderr[-300:]!r}")
 # An eval folder that lists fewer pairs than it scored is refused, naming the fix.
 with open(os.path.join(ev, "summary.json"), "w") as f:
     json.dump({"pooled": {"pairs": 2}, "worst_pairs": []}, f)
@@ -102,6 +114,25 @@ proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--
                        ds, out, "m=" + ev], capture_output=True, text=True)
 check(proc.returncode != 0 and "--worst 2" in proc.stderr,
       f"pair_sweep with a short pair list: exit {proc.returncode}, {proc.stderr[-300:]!r}")
+
+# --- separation_views: each partner exactly SEP degrees from its base. ------------------------
+# The direction model against two known poses: LAO 90 looks along the patient's x axis, and a
+# cranial turn alone moves the direction by the turn.
+check(np.allclose(np.abs(separation_views.direction(90, 0)), [1, 0, 0]), "LAO 90 direction")
+check(abs(separation_views.angle_between((0, 0), (0, 30)) - 30) < 1e-9, "cranial 30 alone")
+pairs = separation_views.sweep_pairs([5, 90])
+check(len(pairs) == 22, f"separation_views: {len(pairs)} pairs for 11 classes x 2")
+for q in pairs:
+    a, b = q["a"], q["b"]
+    sep = separation_views.angle_between((a["primary"], a["secondary"]),
+                                         (b["primary"], b["secondary"]))
+    check(min(abs(sep - 5), abs(sep - 90)) < 1e-4 and a["secondary"] == b["secondary"] and
+          abs(b["primary"]) <= 180, f"separation_views pair {q}: {sep} deg")
+views_out = os.path.join(TMP, "views.json")
+proc = subprocess.run([sys.executable, os.path.join(TOOLS, "separation_views.py"), views_out,
+                       "--separations", "5,0.5"], capture_output=True, text=True)
+check(proc.returncode == 2 and "[0.5]" in proc.stderr and not os.path.exists(views_out),
+      f"separation_views 0.5 deg: exit {proc.returncode}, {proc.stderr[-300:]!r}")
 
 # --- gate_sweep's rule: lowest 2D mean among the settings with enough coverage. ----------------
 settings = [dict(threshold=0.05, delta=2, mean_px=4.0, coverage=0.40),

@@ -55,10 +55,10 @@ def same_tree(a, b, what):
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
-def check_pair_labels(pdir, what, files_per_view=4, views=11):
+def check_pair_labels(pdir, what, files_per_view=4, views=11, pair_count=27):
     """Every dense label of a patient reprojects with its cameras and satisfies the exact F."""
     pairs = sorted(os.listdir(os.path.join(pdir, "pairs")))
-    check(len(pairs) == 27, f"{what}: 27 pairs per patient (6 RCA + 21 LCA), got {len(pairs)}")
+    check(len(pairs) == pair_count, f"{what}: {pair_count} pairs per patient, got {len(pairs)}")
     check(len(os.listdir(os.path.join(pdir, "views"))) == views * files_per_view,
           f"{what}: {views} views x {files_per_view} files (png, mask, camera, points[, overlap])")
     worst_px = worst_epi = 0.0
@@ -157,6 +157,51 @@ opdir = os.path.join(ortho, "patients", "phantom-0000")
 check_pair_labels(opdir, "per-pair orthographic", views=54)
 cam = json.load(open(os.path.join(opdir, "views", "LCA_00.camera.json")))
 check(np.allclose(np.array(cam["P"])[2, :3], 0), f"orthographic P has an affine last row: {cam['P']}")
+
+# Views placed on purpose (--views): a 5-degree pair, a pose two pairs share (rendered once)
+# and one RCA pair. Labels reproject and satisfy F; each view keeps its angles, gets its
+# system's nearest class; the manifest records the list; the bad cases are refused.
+VIEW_LIST = {"format": "gimm-views/1", "pairs": [
+    {"system": "LCA", "a": {"primary": 30, "secondary": 0}, "b": {"primary": 35, "secondary": 0}},
+    {"system": "LCA", "a": {"primary": 30, "secondary": 0}, "b": {"primary": -30, "secondary": 20}},
+    {"system": "RCA", "a": {"primary": 45, "secondary": 0}, "b": {"primary": -30, "secondary": 5}}]}
+views_json = os.path.join(TMP, "views.json")
+with open(views_json, "w") as f:
+    json.dump(VIEW_LIST, f)
+LISTED = ["--phantom", "1", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel", "2.5",
+          "--quiet", "--views", views_json]
+listed = os.path.join(TMP, "listed")
+run(LISTED + ["--out", listed])
+ldir = os.path.join(listed, "patients", "phantom-0000")
+check_pair_labels(ldir, "listed views", views=5, pair_count=3)
+cams = {v: json.load(open(os.path.join(ldir, "views", v + ".camera.json")))
+        for v in ["LCA_00", "LCA_01", "LCA_02", "RCA_00", "RCA_01"]}
+check([(c["primary_deg"], c["secondary_deg"]) for c in cams.values()] ==
+      [(30, 0), (35, 0), (-30, 20), (45, 0), (-30, 5)], "listed views keep their angles")
+check([c["view_class"] for c in cams.values()] == [8, 8, 10, 2, 4],
+      f"listed views' classes {[c['view_class'] for c in cams.values()]}")
+axis = [np.array(cams[v]["R"])[2] for v in ["LCA_00", "LCA_01"]]
+check(abs(np.degrees(np.arccos(np.clip(axis[0] @ axis[1], -1, 1))) - 5) < 1e-6,
+      "the listed LCA pair is 5 degrees apart")
+lab = json.load(open(os.path.join(ldir, "pairs", "LCA_00-02.json")))
+check((lab["view_a"], lab["view_b"]) == ("LCA_00", "LCA_02"), "pairs name their listed views")
+lparams = json.load(open(os.path.join(listed, "manifest.json")))["parameters"]
+check(lparams["view_mode"] == "listed" and lparams["views"] == VIEW_LIST,
+      f"manifest records the list: {lparams.get('view_mode')}, {lparams.get('views')}")
+for extra, text in [(["--export", "reference"], "--views"),
+                    (["--view-mode", "per_pair"], "excludes"),
+                    (["--views", os.path.join(TMP, "no_such_views.json")], "no_such_views.json")]:
+    out = os.path.join(TMP, "listed_refused")
+    args = LISTED + extra if extra[0] != "--views" else LISTED[:-1] + [extra[1]]
+    proc = run(args + ["--out", out], ok=False)
+    check(text in proc.stderr and not os.path.exists(out),
+          f"{extra}: refused naming '{text}', nothing written: {proc.stderr.strip()[-200:]}")
+bad_list = dict(VIEW_LIST, pairs=[dict(VIEW_LIST["pairs"][0], b={"primary": 30.5, "secondary": 0})])
+with open(views_json, "w") as f:
+    json.dump(bad_list, f)
+proc = run(LISTED + ["--out", os.path.join(TMP, "listed_refused")], ok=False)
+check("views.json" in proc.stderr and "pairs[0]" in proc.stderr and "0.5 degrees apart" in proc.stderr,
+      f"a too-close pair refused naming the file and pair: {proc.stderr.strip()[-200:]}")
 
 # Split by patient: each patient in exactly one split file.
 seen = []

@@ -2,13 +2,17 @@
 """Where matchers fail, pair by pair: every pair of a gimm dataset binned by one property of the
 pair, each method's matches pooled per bin.
 
-    tools/atlas/pair_sweep.py --by separation|crossings DATASET OUT NAME=EVAL_DIR [...]
+    tools/atlas/pair_sweep.py --by separation|crossings [--edges E0,E1,...] DATASET OUT
+                              NAME=EVAL_DIR [...]
 
 --by separation: the angle between the two cameras' viewing directions (deg).
 --by crossings:  vessel overlap, the mean number of times an epipolar line crosses the other
                  view's vessel mask (separate runs of mask pixels along the line), over A's
                  vessel pixels (every 7th, their lines drawn in B) and B's (lines in A). 1 means
                  each point has one candidate on its line; 3 means two wrong ones beside it.
+
+--edges: the bin edges, increasing (default: 0,20,40,60,80,100,180 degrees for separation;
+         0,1.5,2,2.5,3,4,100 crossings), e.g. edges around the separations of a listed sweep.
 
 EVAL_DIR: a gimm-eval --out folder made with --worst at least the number of pairs (atlas.sh does
 this), so that its summary.json lists every pair. Writes OUT.md (a table per bin: pairs,
@@ -119,6 +123,7 @@ def pooled(rows):
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--by", choices=sorted(PAIR_VALUE), required=True)
+    p.add_argument("--edges", help="bin edges, comma-separated, increasing")
     p.add_argument("dataset")
     p.add_argument("out")
     p.add_argument("methods", nargs="+", metavar="NAME=EVAL_DIR")
@@ -127,6 +132,13 @@ def main():
         p.error("each method is NAME=EVAL_DIR")
     methods = [spec.split("=", 1) for spec in args.methods]
     edges, value_of = EDGES[args.by], PAIR_VALUE[args.by]
+    if args.edges:
+        try:
+            edges = [float(e) for e in args.edges.split(",")]
+        except ValueError:
+            p.error(f"--edges must be comma-separated numbers, got '{args.edges}'")
+        if len(edges) < 2 or any(b <= a for a, b in zip(edges, edges[1:])):
+            p.error(f"--edges must be at least two increasing numbers, got '{args.edges}'")
     values, table = {}, {}
     for name, folder in methods:
         path = os.path.join(folder, "summary.json")
@@ -167,7 +179,8 @@ def main():
                 q = table[n].get(b, {})
                 vals += [fmt(q.get("prec_3px"), 4), fmt(q.get("mean_px"), 3)]
             # The last bin is open-ended: place it one step past the one before.
-            centre = (b[0] + b[1]) / 2 if b[1] != edges[-1] else b[0] + (b[0] - edges[-3]) / 2
+            open_last = not args.edges and b[1] == edges[-1]
+            centre = b[0] + (b[0] - edges[-3]) / 2 if open_last else (b[0] + b[1]) / 2
             f.write(f"{centre}\t" + "\t".join(vals) + "\n")
     plots = lambda col0: ", ".join(  # noqa: E731
         f"'{data}' using 1:{col0 + 2 * k} with linespoints title '{n}'"

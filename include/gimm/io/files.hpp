@@ -17,11 +17,13 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -360,6 +362,37 @@ void write_folder_all_or_nothing(const std::filesystem::path& target, Write&& wr
 inline bool json_int_in(const nlohmann::json& v, std::int64_t lo, std::int64_t hi) {
   if (v.is_number_unsigned()) return v.get<std::uint64_t>() <= static_cast<std::uint64_t>(hi);
   return v.is_number_integer() && v.get<std::int64_t>() >= lo && v.get<std::int64_t>() <= hi;
+}
+
+/// Typed fields of a JSON object, for readers of files gimm did not write itself: each throws
+/// FormatError naming `where`, the key and the bad value.
+inline const nlohmann::json& json_field(const nlohmann::json& j, const char* key,
+                                        const std::string& where) {
+  GIMM_CHECK_AS(FormatError, j.is_object() && j.contains(key),
+                where << ": missing field '" << key << "'");
+  return j[key];
+}
+
+inline std::string json_string(const nlohmann::json& j, const char* key, const std::string& where) {
+  const auto& v = json_field(j, key, where);
+  GIMM_CHECK_AS(FormatError, v.is_string(),
+                where << ": '" << key << "' must be a string, got " << v.dump());
+  return v.get<std::string>();
+}
+
+inline int json_int(const nlohmann::json& j, const char* key, const std::string& where) {
+  const auto& v = json_field(j, key, where);
+  GIMM_CHECK_AS(FormatError,
+                json_int_in(v, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()),
+                where << ": '" << key << "' must be an integer in int's range, got " << v.dump());
+  return v.get<int>();
+}
+
+inline double json_number(const nlohmann::json& j, const char* key, const std::string& where) {
+  const auto& v = json_field(j, key, where);
+  GIMM_CHECK_AS(FormatError, v.is_number() && std::isfinite(v.get<double>()),
+                where << ": '" << key << "' must be a finite number, got " << v.dump());
+  return v.get<double>();
 }
 
 /// Parses a JSON file; errors name the file and the parse position.

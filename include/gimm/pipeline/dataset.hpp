@@ -38,6 +38,7 @@
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
+#include "gimm/labels/view_list.hpp"
 #include "gimm/render/vessel_mesh_projector.hpp"
 #include "gimm/render/view_renderer.hpp"
 #include "gimm/version.hpp"
@@ -47,6 +48,9 @@ namespace gimm {
 struct DatasetOptions {
   std::uint64_t seed = 0;
   ViewMode view_mode = ViewMode::shared;
+  /// Views placed on purpose (labels/view_list.hpp): when not empty they replace the protocol
+  /// (view_mode is then ignored and recorded as "listed").
+  std::vector<ListedPair> listed_views;
   CArm carm;  ///< detector, distances and model; angles come from the protocol
   ContrastPreset preset = ContrastPreset::angiography;  ///< the contrast recipe's preset
   /// Tissue beyond the scan's axial coverage (padded_attenuation.hpp, docs/recipes.md): 0 = air.
@@ -76,19 +80,21 @@ struct DatasetOptions {
   }
 
   nlohmann::json to_json() const {
-    return {{"seed", seed},
-            {"view_mode", gimm::to_string(view_mode)},
-            {"carm", carm_settings()},
-            {"recipe", gimm::to_string(preset)},
-            {"pad_mm", pad_mm},
-            {"projector", gimm::to_string(projector)},
-            {"vessel_mode", gimm::to_string(vessel_mode)},
-            {"sparse_count", sparse_count},
-            {"line_integrals_npy", write_line_integrals},
-            {"split", {split_train, split_val, 1 - split_train - split_val}},
-            {"min_spur_mm", min_spur_mm},
-            {"allow_single_system", allow_single_system},
-            {"gimm_version", GIMM_VERSION_STRING}};
+    nlohmann::json j = {{"seed", seed},
+                        {"view_mode", listed_views.empty() ? gimm::to_string(view_mode) : "listed"},
+                        {"carm", carm_settings()},
+                        {"recipe", gimm::to_string(preset)},
+                        {"pad_mm", pad_mm},
+                        {"projector", gimm::to_string(projector)},
+                        {"vessel_mode", gimm::to_string(vessel_mode)},
+                        {"sparse_count", sparse_count},
+                        {"line_integrals_npy", write_line_integrals},
+                        {"split", {split_train, split_val, 1 - split_train - split_val}},
+                        {"min_spur_mm", min_spur_mm},
+                        {"allow_single_system", allow_single_system},
+                        {"gimm_version", GIMM_VERSION_STRING}};
+    if (!listed_views.empty()) j["views"] = view_list_to_json(listed_views);
+    return j;
   }
 };
 
@@ -457,6 +463,26 @@ inline std::size_t label_system_pairs(const ViewPlan& plan, const SystemViews& v
   return dense_total;
 }
 
+/// The views and pairs of one system: the listed ones (DatasetOptions::listed_views), else the
+/// protocol's, drawn from the patient's own stream for that system.
+inline ViewPlan system_plan(CoronarySystem system, const DatasetOptions& o,
+                            const std::string& patient) {
+  if (!o.listed_views.empty()) return plan_listed_views(system, o.listed_views);
+  Rng view_stream = patient_stream(o, patient, std::string("views:") + to_string(system));
+  return plan_views(system, o.view_mode, view_stream);
+}
+
+/// The record of one system of a patient (done.json, the manifest).
+inline nlohmann::json system_record(std::int64_t voxels, const ViewPlan& plan, double centerline_mm,
+                                    std::size_t dense_labels) {
+  return {{"present", true},
+          {"voxels", voxels},
+          {"views", plan.views.size()},
+          {"pairs", plan.pairs.size()},
+          {"centerline_mm", centerline_mm},
+          {"dense_labels", dense_labels}};
+}
+
 /// The record of a system the label does not have (allow_single_system).
 inline nlohmann::json absent_system_record() {
   return {{"present", false}, {"voxels", 0},          {"views", 0},
@@ -519,11 +545,14 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     // Branch indices in the labels refer to centerlines.json (both systems).
     const auto points = flatten_centerlines(all, system);
     t.centerlines += stage.lap();
+    const ViewPlan plan = system_plan(system, o, src.id);
+    if (plan.views.empty()) {  // a view list that names the other system only
+      record["systems"][to_string(system)] = system_record(voxels, plan, tree.length(), 0);
+      continue;
+    }
     const ViewRenderer renderer =
         system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr);
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
-    Rng view_stream = patient_stream(o, src.id, std::string("views:") + to_string(system));
-    const ViewPlan plan = plan_views(system, o.view_mode, view_stream);
     const SystemViews views =
         render_system_views(renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id),
                             points, writer, src.id, o.write_line_integrals, t);
@@ -531,12 +560,7 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     t.view_count += plan.views.size();
     const std::size_t dense_total = label_system_pairs(plan, views, points, o, writer, src.id, t);
     stage.lap();
-    record["systems"][to_string(system)] = {{"present", true},
-                                            {"voxels", voxels},
-                                            {"views", plan.views.size()},
-                                            {"pairs", plan.pairs.size()},
-                                            {"centerline_mm", tree.length()},
-                                            {"dense_labels", dense_total}};
+    record["systems"][to_string(system)] = system_record(voxels, plan, tree.length(), dense_total);
   }
   stage.lap();
   writer.write_centerlines(src.id, to_json(all));

@@ -57,6 +57,15 @@ inline void check_export_ids(const std::string& format, const std::vector<std::s
   if (!format.empty()) reference_format::check_patient_ids(ids, "--export " + format);
 }
 
+/// The released layout names a pair by its two view classes; listed views (--views) need not
+/// have two distinct ones, so a dataset made from a view list is not exported.
+inline void check_export_views(const std::string& format, const nlohmann::json& parameters) {
+  GIMM_CHECK(format.empty() || parameters.value("view_mode", "") != "listed",
+             "--export " << format
+                         << " of a dataset made with --views: the released layout names each "
+                            "pair by two distinct view classes, which listed views need not have");
+}
+
 /// One line on stderr that overwrites itself, with log lines printed above it.
 class ProgressLine {
  public:
@@ -119,6 +128,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     std::vector<std::string> ids;
     for (const auto& s : sources) ids.push_back(s.id);
     detail::check_export_ids(run.export_format, ids);
+    detail::check_export_views(run.export_format, options.to_json());
   }
   assign_splits(sources, options);
   const DatasetLayout layout(out);
@@ -217,6 +227,7 @@ inline MergedShards merge_dataset(const std::filesystem::path& out,
   for (const auto& p : merged.manifest.at("patients"))
     if (p.value("status", "") == "ok") ok_ids.push_back(p["id"].get<std::string>());
   detail::check_export_ids(export_format, ok_ids);
+  detail::check_export_views(export_format, merged.manifest.value("parameters", nlohmann::json{}));
   write_run_files(out, merged.manifest, Shard{}, export_format);
   for (const auto& path : merged.shard_files) std::filesystem::remove(path);
   return merged;

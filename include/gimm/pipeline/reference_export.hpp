@@ -143,39 +143,10 @@ inline Image<Rgb8> mask_rgb8(const Image<std::uint8_t>& in) {
 
 namespace detail {
 
-inline const nlohmann::json& ref_field(const nlohmann::json& j, const char* key,
-                                       const std::string& where) {
-  GIMM_CHECK_AS(FormatError, j.is_object() && j.contains(key),
-                where << ": missing field '" << key << "'");
-  return j[key];
-}
-
-inline std::string ref_string(const nlohmann::json& j, const char* key, const std::string& where) {
-  const auto& v = ref_field(j, key, where);
-  GIMM_CHECK_AS(FormatError, v.is_string(),
-                where << ": '" << key << "' must be a string, got " << v.dump());
-  return v.get<std::string>();
-}
-
-inline int ref_int(const nlohmann::json& j, const char* key, const std::string& where) {
-  const auto& v = ref_field(j, key, where);
-  GIMM_CHECK_AS(FormatError,
-                json_int_in(v, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()),
-                where << ": '" << key << "' must be an integer in int's range, got " << v.dump());
-  return v.get<int>();
-}
-
-inline double ref_number(const nlohmann::json& j, const char* key, const std::string& where) {
-  const auto& v = ref_field(j, key, where);
-  GIMM_CHECK_AS(FormatError, v.is_number() && std::isfinite(v.get<double>()),
-                where << ": '" << key << "' must be a finite number, got " << v.dump());
-  return v.get<double>();
-}
-
 /// A view name from a pair file: a plain file stem inside views/ (no path tricks).
 inline std::string ref_view_name(const nlohmann::json& pair, const char* key,
                                  const std::string& where) {
-  const std::string name = ref_string(pair, key, where);
+  const std::string name = json_string(pair, key, where);
   GIMM_CHECK_AS(FormatError,
                 !name.empty() && name != "." && name != ".." &&
                     name.find_first_of("/\\") == std::string::npos,
@@ -200,11 +171,11 @@ inline RefView read_ref_view(const std::filesystem::path& views_dir, const std::
   const std::string where = path.string();
   const nlohmann::json j = read_json_file(path);
   v.camera = camera_from_json(j, where);
-  v.system = ref_string(j, "system", where);
-  v.view_name = ref_string(j, "view_name", where);
-  v.view_class = ref_int(j, "view_class", where);
-  v.primary_deg = ref_number(j, "primary_deg", where);
-  v.secondary_deg = ref_number(j, "secondary_deg", where);
+  v.system = json_string(j, "system", where);
+  v.view_name = json_string(j, "view_name", where);
+  v.view_class = json_int(j, "view_class", where);
+  v.primary_deg = json_number(j, "primary_deg", where);
+  v.secondary_deg = json_number(j, "secondary_deg", where);
   GIMM_CHECK_AS(FormatError, v.view_class >= 1 && v.view_class <= 11,
                 where << ": 'view_class' must be in 1..11, got " << v.view_class);
   const ViewClass& c = view_class(v.view_class);
@@ -256,7 +227,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   using nlohmann::json;
   const DatasetLayout layout(dataset_dir);
   check_dataset_format(manifest, mwhere);
-  const json& patients = detail::ref_field(manifest, "patients", mwhere);
+  const json& patients = json_field(manifest, "patients", mwhere);
   GIMM_CHECK_AS(FormatError, patients.is_array(),
                 mwhere << ": 'patients' must be an array, got " << patients.type_name());
 
@@ -271,9 +242,9 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   for (const json& record : patients) {
     const std::string status = record.is_object() ? record.value("status", "") : "";
     if (status != "ok") continue;
-    const std::string id = detail::ref_string(record, "id", mwhere);
+    const std::string id = json_string(record, "id", mwhere);
     const std::string pwhere = mwhere + " (patient '" + id + "')";
-    const std::string split = detail::ref_string(record, "split", pwhere);
+    const std::string split = json_string(record, "split", pwhere);
     GIMM_CHECK_AS(FormatError, lists.count(split),
                   pwhere << ": 'split' must be train, val or test, got '" << split << "'");
     ok.push_back(&record);
@@ -312,10 +283,8 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
       p.labels = read_json_file(file);
       const std::string va = detail::ref_view_name(p.labels, "view_a", where);
       const std::string vb = detail::ref_view_name(p.labels, "view_b", where);
-      p.a = detail::read_ref_view(views_dir, va, detail::ref_int(p.labels, "view_class_a", where),
-                                  where);
-      p.b = detail::read_ref_view(views_dir, vb, detail::ref_int(p.labels, "view_class_b", where),
-                                  where);
+      p.a = detail::read_ref_view(views_dir, va, json_int(p.labels, "view_class_a", where), where);
+      p.b = detail::read_ref_view(views_dir, vb, json_int(p.labels, "view_class_b", where), where);
       GIMM_CHECK_AS(FormatError, p.a.system == p.b.system && p.a.view_class != p.b.view_class,
                     where << ": a pair needs two view classes of one system, got " << p.a.system
                           << " '" << p.a.view_name << "' and " << p.b.system << " '"
@@ -358,7 +327,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
         pts_b.push_back({c.b.x(), c.b.y()});
         pts_3d.push_back({c.world.x(), c.world.y(), c.world.z()});
       }
-      const json& sparse = detail::ref_field(p.labels, "sparse", where);
+      const json& sparse = json_field(p.labels, "sparse", where);
       GIMM_CHECK_AS(FormatError, sparse.is_array(),
                     where << ": 'sparse' must be an array, got " << sparse.type_name());
       json categories = json::array(), sparse_a = json::array(), sparse_b = json::array();
@@ -407,7 +376,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
             {"points_3d", "world mm (LPS), not voxel indices"},
             {"P1", gimm::matrix_to_json(p.a.camera.P())},
             {"P2", gimm::matrix_to_json(p.b.camera.P())},
-            {"F", detail::ref_field(p.labels, "F", where)},
+            {"F", json_field(p.labels, "F", where)},
             {"F_convention", "x_B^T F x_A = 0, pixels"},
             {"view_class_A", p.a.view_class},
             {"view_class_B", p.b.view_class},
