@@ -208,6 +208,10 @@ int main(int argc, char** argv) {
                  "geometric, segmenting: tree prior, how far in 3D the matches of two chains "
                  "meeting in A may be, mm (0 = off)")
       ->capture_default_str();
+  double min_confidence = 0;
+  app.add_option("--min-confidence", min_confidence,
+                 "geometric: the confidence (DP margin) a match needs (default 0.5 with masks, 1 "
+                 "segmenting; docs/geometric-matcher.md has 512 px figures for 1 and 2)");
   app.add_option("--order-cost", geometric.w_order,
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
       ->capture_default_str();
@@ -306,6 +310,7 @@ int main(int argc, char** argv) {
     const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
                                                                 {"--order-cost", "geometric"},
                                                                 {"--junction-mm", "geometric"},
+                                                                {"--min-confidence", "geometric"},
                                                                 {"--segment", "geometric"},
                                                                 {"--exact-vesselness", "geometric"},
                                                                 {"--sigma", "oracle"},
@@ -327,6 +332,8 @@ int main(int argc, char** argv) {
                "(without it the matcher uses the vessel masks)");
     // Every mode segments with it: a dataset (--segment), a pair of images, a pair of DICOMs.
     geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
+    if (app.count("--min-confidence"))  // whichever of the two thresholds the mode uses
+      geometric.min_confidence = geometric.min_confidence_segmented = min_confidence;
     if (!dataset.empty()) {
       GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
                      dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&

@@ -53,6 +53,22 @@ check(seg["prec_3px"] >= epi["prec_3px"] + 0.10,
       f"segmented Prec@3px {seg['prec_3px']:.3f} not 0.10 above epipolar's {epi['prec_3px']:.3f}")
 check(seg["coverage"] >= 0.1, f"segmented coverage {seg['coverage']:.3f} < 0.1")
 
+# --min-confidence: a stricter threshold keeps a subset, every match at or above it.
+strict = summary("geometric", "--min-confidence", 2)
+pred_default = os.path.join(TMP, "pred-geometric")
+pred_strict = os.path.join(TMP, "pred-geometric--min-confidence2")
+kept = total = 0
+for patient in sorted(os.listdir(pred_strict)):
+    for name in sorted(os.listdir(os.path.join(pred_strict, patient))):
+        with open(os.path.join(pred_strict, patient, name)) as f:
+            m = json.load(f)
+        with open(os.path.join(pred_default, patient, name)) as f:
+            d = json.load(f)
+        check(all(c >= 2 for c in m["confidence"]), f"--min-confidence 2: {name} keeps less")
+        kept, total = kept + len(m["confidence"]), total + len(d["confidence"])
+check(0 < kept < total, f"--min-confidence 2 kept {kept} of {total} matches")
+check(strict["coverage"] < geo["coverage"], "--min-confidence 2 did not lower the coverage")
+
 # Degraded images (--noise-photons, --blur-px): the matcher sees them, the truth does not; the
 # same seed gives the same predictions.
 segmented = {}
@@ -125,6 +141,10 @@ cases = [
     ("nan ordering cost", [*pair, "--order-cost", "nan"], "--order-cost: must be a finite number, got nan"),
     ("negative tree prior", [*pair, "--junction-mm", -1], "junction_mm must be >= 0"),
     ("nan tree prior", [*pair, "--junction-mm", "nan"], "--junction-mm: must be a finite number, got nan"),
+    ("min confidence for the learned matcher", ["--dataset", ds, "--min-confidence", 1],
+     "--min-confidence is for --method geometric, not learned"),
+    ("negative min confidence", [*pair, "--min-confidence", -0.5],
+     "minimum confidences must be finite and >= 0, got -0.5"),
     ("sigma for the learned matcher", ["--dataset", ds, "--sigma", 2], "--sigma is for --method oracle"),
 ]
 for name, args, needle in cases:

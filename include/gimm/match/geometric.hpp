@@ -446,6 +446,11 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
                  o.consistency_px > 0,
              "geometric matcher: sample_px, epipolar_tolerance_px and consistency_px must be > "
              "0 and no_match_cost >= 0");
+  GIMM_CHECK(std::isfinite(o.min_confidence) && o.min_confidence >= 0 &&
+                 std::isfinite(o.min_confidence_segmented) && o.min_confidence_segmented >= 0,
+             "geometric matcher: the minimum confidences must be finite and >= 0, got "
+                 << o.min_confidence << " (masks) and " << o.min_confidence_segmented
+                 << " (segmented)");
   GIMM_CHECK(std::isfinite(o.w_order) && o.w_order >= 0,
              "geometric matcher: the ordering cost must be finite and >= 0, got " << o.w_order);
   GIMM_CHECK(std::isfinite(o.junction_mm) && o.junction_mm >= 0 && o.junction_px > 0 &&
