@@ -15,7 +15,7 @@ void bind_geometric(py::module_& m) {
       "match_geometric",
       [](const py::handle& image_a, const py::handle& image_b, const py::handle& camera_a,
          const py::handle& camera_b, const py::object& mask_a, const py::object& mask_b,
-         double tolerance_px, bool exact_vesselness) {
+         double tolerance_px, bool exact_vesselness, const py::object& min_confidence) {
         if (mask_a.is_none() != mask_b.is_none())
           throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
         const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
@@ -37,6 +37,8 @@ void bind_geometric(py::module_& m) {
         GeometricOptions o;
         o.epipolar_tolerance_px = tolerance_px;
         o.segmentation.vesselness.exact_derivatives = exact_vesselness;
+        if (!min_confidence.is_none())  // whichever threshold the pair's mode uses
+          o.min_confidence = o.min_confidence_segmented = min_confidence.cast<double>();
         std::vector<GeometricMatch> found;
         {
           py::gil_scoped_release release;
@@ -54,7 +56,8 @@ void bind_geometric(py::module_& m) {
       },
       py::arg("image_a"), py::arg("image_b"), py::arg("camera_a"), py::arg("camera_b"),
       py::kw_only(), py::arg("mask_a") = py::none(), py::arg("mask_b") = py::none(),
-      py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false, R"doc(
+      py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false,
+      py::arg("min_confidence") = py::none(), R"doc(
 The training-free geometric matcher (docs/geometric-matcher.md), as gimm-match --method geometric
 does for one pair: vessels segmented from the images (or the masks given), 2D centerlines, and a
 dynamic programme along each centerline over the crossings of its epipolar lines, both ways.
@@ -63,7 +66,9 @@ image_a, image_b: float (rows, cols) in [0, 1], dark vessels on a bright backgro
 camera_b: Camera or CArm, each for its image's size (required: the matcher is geometry).
 mask_a, mask_b: optional vessel masks (nonzero = vessel), both or neither; without them the
 images are segmented. tolerance_px: the epipolar tolerance (calibration error of real C-arms).
-exact_vesselness: the slow reference kernels instead of the fast ones.
+exact_vesselness: the slow reference kernels instead of the fast ones. min_confidence: the
+confidence a match needs (default None: 0.5 with masks, 1 segmenting; gimm-match
+--min-confidence).
 Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the DP margin),
 world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras, F_source
 'cameras'). The GIL is released while matching.)doc");

@@ -267,6 +267,15 @@ class Matching(unittest.TestCase):
             gimm.match_geometric(small, small, a, b)
         with self.assertRaisesRegex(gimm.Error, "tolerance"):
             gimm.match_geometric(image, image, a, b, tolerance_px=0.0)
+        # A stricter threshold keeps a subset, each match at or above it; a negative one is
+        # refused.
+        strict = gimm.match_geometric(rendered[0]["intensity"], rendered[1]["intensity"], a, b,
+                                      mask_a=rendered[0]["vessel_mask"],
+                                      mask_b=rendered[1]["vessel_mask"], min_confidence=3.0)
+        self.assertLess(len(strict["confidence"]), len(found["confidence"]))
+        self.assertTrue(np.all(strict["confidence"] >= 3.0))
+        with self.assertRaisesRegex(gimm.Error, "minimum confidences must be finite and >= 0"):
+            gimm.match_geometric(image, image, a, b, min_confidence=-1.0)
         empty = gimm.match_geometric(np.full(image.shape, 0.8, np.float32),
                                      np.full(image.shape, 0.8, np.float32), a, b)
         self.assertEqual(empty["points_a"].shape, (0, 2))
