@@ -101,6 +101,10 @@ proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--
                        "--edges", "0,2.9,9", ds, out, "m=" + ev], capture_output=True, text=True)
 check(proc.returncode == 0 and "| 2.9-9 | 1 | 0.500 | 4.00 | 0.500 |" in open(out + ".md").read(),
       f"pair_sweep --edges: exit {proc.returncode}, {proc.stderr[-300:]!r}")
+proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--by", "crossings",
+                       "--edges", "0,1,2", ds, out, "m=" + ev], capture_output=True, text=True)
+check(proc.returncode == 1 and "p0/LCA_00-01" in proc.stderr and "Traceback" not in proc.stderr,
+      f"pair_sweep, a pair outside --edges: exit {proc.returncode}, {proc.stderr[-300:]!r}")
 for edges in ["0,5,5", "10,0", "0,x"]:
     proc = subprocess.run([sys.executable, os.path.join(TOOLS, "pair_sweep.py"), "--by",
                            "crossings", "--edges", edges, ds, out, "m=" + ev],
@@ -133,6 +137,10 @@ proc = subprocess.run([sys.executable, os.path.join(TOOLS, "separation_views.py"
                        "--separations", "5,0.5"], capture_output=True, text=True)
 check(proc.returncode == 2 and "[0.5]" in proc.stderr and not os.path.exists(views_out),
       f"separation_views 0.5 deg: exit {proc.returncode}, {proc.stderr[-300:]!r}")
+proc = subprocess.run([sys.executable, os.path.join(TOOLS, "separation_views.py"), views_out,
+                       "--separations", "5,10,5"], capture_output=True, text=True)
+check(proc.returncode == 2 and "twice" in proc.stderr and not os.path.exists(views_out),
+      f"separation_views 5 twice: exit {proc.returncode}, {proc.stderr[-300:]!r}")
 
 # --- gate_sweep's rule: lowest 2D mean among the settings with enough coverage. ----------------
 settings = [dict(threshold=0.05, delta=2, mean_px=4.0, coverage=0.40),

@@ -200,8 +200,30 @@ bad_list = dict(VIEW_LIST, pairs=[dict(VIEW_LIST["pairs"][0], b={"primary": 30.5
 with open(views_json, "w") as f:
     json.dump(bad_list, f)
 proc = run(LISTED + ["--out", os.path.join(TMP, "listed_refused")], ok=False)
-check("views.json" in proc.stderr and "pairs[0]" in proc.stderr and "0.5 degrees apart" in proc.stderr,
-      f"a too-close pair refused naming the file and pair: {proc.stderr.strip()[-200:]}")
+check("views.json" in proc.stderr and "pairs[0]" in proc.stderr and "0.5 degrees apart" in proc.stderr
+      and not os.path.exists(os.path.join(TMP, "listed_refused")),
+      f"a too-close pair refused naming the file and pair, nothing written: "
+      f"{proc.stderr.strip()[-200:]}")
+# A list that names one system: the other gets centerlines but no views, recorded as present.
+one_system = dict(VIEW_LIST, pairs=VIEW_LIST["pairs"][:1])
+with open(views_json, "w") as f:
+    json.dump(one_system, f)
+lca_only = os.path.join(TMP, "listed_lca_only")
+run(LISTED + ["--out", lca_only])
+record = json.load(open(os.path.join(lca_only, "manifest.json")))["patients"][0]
+rca = record["systems"]["RCA"]
+check(record["status"] == "ok" and rca["present"] and rca["views"] == 0 and rca["pairs"] == 0
+      and rca["centerline_mm"] > 0 and record["systems"]["LCA"]["pairs"] == 1,
+      f"one-system list: {record['systems']}")
+check(sorted(os.listdir(os.path.join(lca_only, "patients", "phantom-0000", "pairs"))) ==
+      ["LCA_00-01.json"], "one-system list: only its pair is written")
+# Resumed with another list: refused like any other change of parameters, nothing changed.
+with open(views_json, "w") as f:
+    json.dump(VIEW_LIST, f)
+before = tree_files(lca_only)
+proc = run(LISTED + ["--out", lca_only], ok=False)
+check("other parameters" in proc.stderr and tree_files(lca_only) == before,
+      f"resumed with another view list: {proc.stderr.strip()[-200:]}")
 
 # Split by patient: each patient in exactly one split file.
 seen = []

@@ -64,7 +64,7 @@ for patient in sorted(os.listdir(pred_strict)):
             m = json.load(f)
         with open(os.path.join(pred_default, patient, name)) as f:
             d = json.load(f)
-        check(all(c >= 2 for c in m["confidence"]), f"--min-confidence 2: {name} keeps less")
+        check(all(c >= 2 for c in m["confidence"]), f"--min-confidence 2: {name} keeps a match below 2")
         kept, total = kept + len(m["confidence"]), total + len(d["confidence"])
 check(0 < kept < total, f"--min-confidence 2 kept {kept} of {total} matches")
 check(strict["coverage"] < geo["coverage"], "--min-confidence 2 did not lower the coverage")

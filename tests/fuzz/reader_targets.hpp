@@ -22,6 +22,7 @@
 #include "gimm/io/npy.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/io/volume_file.hpp"
+#include "gimm/labels/view_list.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/nn/matcher_file.hpp"
 #include "gimm/nn/safetensors.hpp"
@@ -138,6 +139,16 @@ inline std::vector<ReaderTarget> reader_targets(const fs::path& fixtures) {
                  b.radii = {1.5, 1.4, 1.2};
                  tree.branches.push_back(b);
                  gimm::write_json_file(p, gimm::to_json(tree));
+               }});
+  // A view list (gimm-dataset --views).
+  t.push_back({"view_list", ".json", [](const fs::path& p) { (void)gimm::read_view_list(p); },
+               [](const fs::path& p) {
+                 write_text(p,
+                            R"({"format": "gimm-views/1", "note": "seed", "pairs": [)"
+                            R"({"system": "LCA", "a": {"primary": 30, "secondary": 0},)"
+                            R"( "b": {"primary": 35, "secondary": 0}},)"
+                            R"({"system": "RCA", "a": {"primary": 45, "secondary": 0},)"
+                            R"( "b": {"primary": -30, "secondary": 5}}]})");
                }});
   // Dataset JSON: a pair file (labels, F, classes) and a manifest (format, patients).
   t.push_back({"pair", ".json",

@@ -30,7 +30,7 @@ TEST_CASE("View list: classes from the angles, poses shared, file order kept",
   CHECK(pairs[1].b.view_class == 10);  // LCA RAO Cranial
   CHECK(pairs[2].a.view_class == 2);   // RCA LAO
   CHECK(pairs[2].b.view_class == 4);   // RCA RAO
-  // The class is the system's own: LAO 50 / cranial 22 is LCA class 8 but RCA class 3.
+  // The class is the system's own: LAO 45 / cranial 22 is LCA class 8 but RCA class 3.
   const auto rca = view_list_from_json(
       list_of({{{"system", "RCA"}, {"a", pose(45, 22)}, {"b", pose(50, 0)}}}), "test");
   CHECK(rca[0].a.view_class == 3);
@@ -104,6 +104,17 @@ TEST_CASE("View list: bad input is refused naming the field and value", "[labels
   bad = good;
   bad["a"] = 30;
   fails(list_of({bad}), "a pose must be an object");
+  // The same pair twice, in either order, is refused; in the other system it is another pair.
+  json swapped = good;
+  std::swap(swapped["a"], swapped["b"]);
+  fails(list_of({good, good}), "pairs[1]: the same pair as pairs[0]");
+  fails(list_of({good, swapped}), "pairs[1]: the same pair as pairs[0]");
+  json other_system = good;
+  other_system["system"] = "RCA";
+  CHECK(view_list_from_json(list_of({good, other_system}), "test").size() == 2);
+  CHECK(view_list_from_json({{"format", "gimm-views/1"}, {"note", "sweep"}, {"pairs", {good}}},
+                            "test")
+            .size() == 1);
   // The file reader names the file.
   CHECK_THROWS_WITH(read_view_list("/nonexistent/views.json"),
                     Catch::Contains("/nonexistent/views.json"));

@@ -272,6 +272,7 @@ class Matching(unittest.TestCase):
         strict = gimm.match_geometric(rendered[0]["intensity"], rendered[1]["intensity"], a, b,
                                       mask_a=rendered[0]["vessel_mask"],
                                       mask_b=rendered[1]["vessel_mask"], min_confidence=3.0)
+        self.assertGreater(len(strict["confidence"]), 0)
         self.assertLess(len(strict["confidence"]), len(found["confidence"]))
         self.assertTrue(np.all(strict["confidence"] >= 3.0))
         with self.assertRaisesRegex(gimm.Error, "minimum confidences must be finite and >= 0"):

@@ -153,7 +153,11 @@ def main():
         for r in rows:
             if r["pair"] not in values:
                 values[r["pair"]] = value_of(args.dataset, r["pair"])
-            bins.setdefault(bin_of(values[r["pair"]], edges), []).append(r)
+            try:
+                b = bin_of(values[r["pair"]], edges)
+            except ValueError as e:
+                sys.exit(f"pair_sweep: pair {r['pair']}: {e} (--edges)")
+            bins.setdefault(b, []).append(r)
         table[name] = {b: pooled(rs) for b, rs in bins.items()}
     used = sorted({b for per in table.values() for b in per})
     fmt = lambda v, d: "-" if v is None else f"{v:.{d}f}"  # noqa: E731

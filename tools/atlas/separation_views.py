@@ -67,6 +67,8 @@ def main():
         separations = [float(x) for x in args.separations.split(",")]
     except ValueError:
         p.error(f"--separations must be comma-separated numbers, got '{args.separations}'")
+    if len(set(separations)) != len(separations):
+        p.error(f"--separations lists a separation twice: '{args.separations}'")
     bad = [s for s in separations if not 1 <= s <= 120]
     if bad:
         p.error(f"--separations must lie in [1, 120] degrees, got {bad}")

@@ -8,7 +8,8 @@
 ///   {"format": "gimm-views/1",
 ///    "pairs": [{"system": "LCA", "a": {"primary": 30, "secondary": 0},
 ///                                "b": {"primary": 35, "secondary": 0}}, ...]}
-/// A pose used by several pairs of one system is rendered once; pairs keep the file's order.
+/// A pose used by several pairs of one system is rendered once; pairs keep the file's order; a
+/// pair listed twice is refused. A top-level "note" (free text) is allowed and ignored.
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -96,6 +97,16 @@ inline std::vector<ListedPair> view_list_from_json(const nlohmann::json& doc,
     GIMM_CHECK_AS(FormatError, separation >= kMinListedSeparationDeg,
                   at << ": views a and b are " << separation << " degrees apart; at least "
                      << kMinListedSeparationDeg << " is needed for an epipolar geometry");
+    // A pair listed twice (in either order) would write one pair file twice and count it twice.
+    const auto same = [](const SampledView& x, const SampledView& y) {
+      return x.primary_deg == y.primary_deg && x.secondary_deg == y.secondary_deg;
+    };
+    for (std::size_t k = 0; k < out.size(); ++k)
+      GIMM_CHECK_AS(
+          FormatError,
+          out[k].system != pair.system || !((same(out[k].a, pair.a) && same(out[k].b, pair.b)) ||
+                                            (same(out[k].a, pair.b) && same(out[k].b, pair.a))),
+          at << ": the same pair as pairs[" << k << "]");
     out.push_back(pair);
   }
   return out;

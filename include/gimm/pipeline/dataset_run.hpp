@@ -57,13 +57,8 @@ inline void check_export_ids(const std::string& format, const std::vector<std::s
   if (!format.empty()) reference_format::check_patient_ids(ids, "--export " + format);
 }
 
-/// The released layout names a pair by its two view classes; listed views (--views) need not
-/// have two distinct ones, so a dataset made from a view list is not exported.
 inline void check_export_views(const std::string& format, const nlohmann::json& parameters) {
-  GIMM_CHECK(format.empty() || parameters.value("view_mode", "") != "listed",
-             "--export " << format
-                         << " of a dataset made with --views: the released layout names each "
-                            "pair by two distinct view classes, which listed views need not have");
+  if (!format.empty()) reference_format::check_views_exportable(parameters, "--export " + format);
 }
 
 /// One line on stderr that overwrites itself, with log lines printed above it.

@@ -82,6 +82,17 @@ inline std::string patient_token(const std::string& id, const std::string& where
   return id;
 }
 
+/// A dataset made from a view list (gimm-dataset --views, manifest parameters view_mode
+/// "listed") is not exported: the released layout names a pair by its two view classes, which
+/// listed views need not have distinct. `where` names the source in the error.
+inline void check_views_exportable(const nlohmann::json& parameters, const std::string& where) {
+  const bool listed = parameters.is_object() && parameters.contains("view_mode") &&
+                      parameters["view_mode"] == "listed";
+  GIMM_CHECK(!listed, where << ": a dataset made with --views (view_mode 'listed') cannot be "
+                               "exported: the released layout names each pair by two distinct "
+                               "view classes, which listed views need not have");
+}
+
 /// Checks every patient id up front: each must make a token (patient_token) and no two the same
 /// token ("7" and "0007"). gimm-dataset calls it before rendering anything, export_reference
 /// before writing anything. `where` names the source in the error.
@@ -227,6 +238,7 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   using nlohmann::json;
   const DatasetLayout layout(dataset_dir);
   check_dataset_format(manifest, mwhere);
+  rf::check_views_exportable(manifest.value("parameters", json()), mwhere);
   const json& patients = json_field(manifest, "patients", mwhere);
   GIMM_CHECK_AS(FormatError, patients.is_array(),
                 mwhere << ": 'patients' must be an array, got " << patients.type_name());
