@@ -143,12 +143,11 @@ inline std::vector<ReaderTarget> reader_targets(const fs::path& fixtures) {
   // A view list (gimm-dataset --views).
   t.push_back({"view_list", ".json", [](const fs::path& p) { (void)gimm::read_view_list(p); },
                [](const fs::path& p) {
-                 write_text(p,
-                            R"({"format": "gimm-views/1", "note": "seed", "pairs": [)"
-                            R"({"system": "LCA", "a": {"primary": 30, "secondary": 0},)"
-                            R"( "b": {"primary": 35, "secondary": 0}},)"
-                            R"({"system": "RCA", "a": {"primary": 45, "secondary": 0},)"
-                            R"( "b": {"primary": -30, "secondary": 5}}]})");
+                 write_text(p, R"({"format": "gimm-views/1", "note": "seed", "pairs": [)"
+                               R"({"system": "LCA", "a": {"primary": 30, "secondary": 0},)"
+                               R"( "b": {"primary": 35, "secondary": 0}},)"
+                               R"({"system": "RCA", "a": {"primary": 45, "secondary": 0},)"
+                               R"( "b": {"primary": -30, "secondary": 5}}]})");
                }});
   // Dataset JSON: a pair file (labels, F, classes) and a manifest (format, patients).
   t.push_back({"pair", ".json",
