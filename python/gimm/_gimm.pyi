@@ -262,7 +262,8 @@ class Matcher:
 def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraLike,
                     camera_b: _CameraLike, *, mask_a: Optional[np.ndarray] = None,
                     mask_b: Optional[np.ndarray] = None, tolerance_px: float = 3.0,
-                    exact_vesselness: bool = False) -> Dict[str, Any]: ...
+                    exact_vesselness: bool = False,
+                    min_confidence: Optional[float] = None) -> Dict[str, Any]: ...
 def match_baseline(truth: Mapping[str, Any], method: Literal["epipolar", "oracle"] = "epipolar",
                    *, sigma_px: float = 1.0, max_points: int = 300,
                    seed: int = 0) -> Dict[str, Any]: ...

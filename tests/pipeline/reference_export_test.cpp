@@ -337,11 +337,10 @@ TEST_CASE("Reference export: ids are checked before anything is written", "[pipe
 
   // A dataset made from a view list (gimm-dataset --views) is refused by the library too, before
   // anything is written, naming the manifest.
-  gimm::write_json_file(
-      dataset / "manifest.json",
-      {{"format", "gimm-dataset/1"},
-       {"parameters", {{"view_mode", "listed"}}},
-       {"patients", {{{"id", "7"}, {"split", "train"}, {"status", "ok"}}}}});
+  gimm::write_json_file(dataset / "manifest.json",
+                        {{"format", "gimm-dataset/1"},
+                         {"parameters", {{"view_mode", "listed"}}},
+                         {"patients", {{{"id", "7"}, {"split", "train"}, {"status", "ok"}}}}});
   CHECK_THROWS_WITH(gimm::export_reference(dataset, out),
                     Catch::Contains("made with --views") &&
                         Catch::Contains((dataset / "manifest.json").string()));
