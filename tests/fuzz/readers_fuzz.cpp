@@ -90,7 +90,20 @@ int main(int argc, char** argv) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   int defects = 0;
-  for (const auto& t : gimm_fuzz::reader_targets(fs::path(GIMM_SOURCE_DIR) / "tests" / "data")) {
+  const auto targets = gimm_fuzz::reader_targets(fs::path(GIMM_SOURCE_DIR) / "tests" / "data");
+#ifdef GIMM_LIBFUZZER_TARGETS
+  // The libFuzzer links are a list in tests/CMakeLists.txt: it must name every reader here.
+  std::string names;
+  for (const auto& t : targets) names += (names.empty() ? "" : " ") + t.name;
+  if (names != GIMM_LIBFUZZER_TARGETS) {
+    std::fprintf(stderr,
+                 "readers_fuzz: GIMM_READER_FUZZ_TARGETS in tests/CMakeLists.txt is '%s'; the "
+                 "readers of reader_targets.hpp are '%s'\n",
+                 GIMM_LIBFUZZER_TARGETS, names.c_str());
+    ++defects;
+  }
+#endif
+  for (const auto& t : targets) {
     gimm::Rng rng = gimm::Rng(seed).fork(gimm::stable_hash(t.name));
     int refused = 0;
     // The seed itself must read (a throw here ends the run: the harness is broken).
