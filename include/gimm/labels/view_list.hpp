@@ -36,6 +36,11 @@ struct ListedPair {
   SampledView a, b;
 };
 
+/// Two listed poses are one view when their angles are equal (a shared pose renders once).
+inline bool same_pose(const SampledView& x, const SampledView& y) {
+  return x.primary_deg == y.primary_deg && x.secondary_deg == y.secondary_deg;
+}
+
 namespace detail {
 
 /// Refuses keys a reader would silently ignore (a typo such as "secundary").
@@ -98,15 +103,13 @@ inline std::vector<ListedPair> view_list_from_json(const nlohmann::json& doc,
                   at << ": views a and b are " << separation << " degrees apart; at least "
                      << kMinListedSeparationDeg << " is needed for an epipolar geometry");
     // A pair listed twice (in either order) would write one pair file twice and count it twice.
-    const auto same = [](const SampledView& x, const SampledView& y) {
-      return x.primary_deg == y.primary_deg && x.secondary_deg == y.secondary_deg;
-    };
-    for (std::size_t k = 0; k < out.size(); ++k)
-      GIMM_CHECK_AS(
-          FormatError,
-          out[k].system != pair.system || !((same(out[k].a, pair.a) && same(out[k].b, pair.b)) ||
-                                            (same(out[k].a, pair.b) && same(out[k].b, pair.a))),
-          at << ": the same pair as pairs[" << k << "]");
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      const ListedPair& q = out[k];
+      const bool twice =
+          q.system == pair.system && ((same_pose(q.a, pair.a) && same_pose(q.b, pair.b)) ||
+                                      (same_pose(q.a, pair.b) && same_pose(q.b, pair.a)));
+      GIMM_CHECK_AS(FormatError, !twice, at << ": the same pair as pairs[" << k << "]");
+    }
     out.push_back(pair);
   }
   return out;
@@ -135,9 +138,7 @@ inline ViewPlan plan_listed_views(CoronarySystem system, const std::vector<Liste
   ViewPlan plan{system, {}, {}};
   const auto index_of = [&plan](const SampledView& v) {
     for (std::size_t i = 0; i < plan.views.size(); ++i)
-      if (plan.views[i].primary_deg == v.primary_deg &&
-          plan.views[i].secondary_deg == v.secondary_deg)
-        return i;
+      if (same_pose(plan.views[i], v)) return i;
     plan.views.push_back(v);
     return plan.views.size() - 1;
   };
