@@ -210,8 +210,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   double min_confidence = 0;
   app.add_option("--min-confidence", min_confidence,
-                 "geometric: the confidence (DP margin) a match needs (default 0.5 with masks, 1 "
-                 "segmenting; docs/geometric-matcher.md has 512 px figures for 1 and 2)");
+                 "geometric: the DP margin a match needs at 4/3 px per mm at the isocentre (the "
+                 "256 px phantoms), scaled with the images' pixels per mm (default 0.5 with "
+                 "masks, 1 segmenting; docs/geometric-matcher.md)");
   app.add_option("--order-cost", geometric.w_order,
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
       ->capture_default_str();

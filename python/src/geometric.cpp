@@ -48,10 +48,15 @@ void bind_geometric(py::module_& m) {
         matches.F = fundamental_from_cameras(*input.camera_a, *input.camera_b);
         matches.F_source = "cameras";
         std::vector<Eigen::Vector3d> world;
-        for (const auto& g : found) world.push_back(g.world);
+        py::array_t<double> margin(static_cast<py::ssize_t>(found.size()));
+        for (std::size_t k = 0; k < found.size(); ++k) {
+          world.push_back(found[k].world);
+          margin.mutable_at(static_cast<py::ssize_t>(k)) = found[k].margin;
+        }
         py::dict d = matches_dict(std::move(matches));
         d.attr("pop")("pair");
         d["world_mm"] = rows_to_numpy<3>(world);
+        d["margin"] = margin;
         return d;
       },
       py::arg("image_a"), py::arg("image_b"), py::arg("camera_a"), py::arg("camera_b"),
@@ -67,11 +72,12 @@ camera_b: Camera or CArm, each for its image's size (required: the matcher is ge
 mask_a, mask_b: optional vessel masks (nonzero = vessel), both or neither; without them the
 images are segmented. tolerance_px: the epipolar tolerance (calibration error of real C-arms).
 exact_vesselness: the slow reference kernels instead of the fast ones. min_confidence: the
-confidence a match needs (default None: 0.5 with masks, 1 segmenting; gimm-match
---min-confidence).
-Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the DP margin),
-world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras, F_source
-'cameras'). The GIL is released while matching.)doc");
+DP margin a match needs at 4/3 pixels per mm at the isocentre, scaled with the images' pixels
+per mm (default None: 0.5 with masks, 1 segmenting; gimm-match --min-confidence).
+Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the ranking: the margin
+times how well the match is placed), margin (N,) (the DP margin, what min_confidence
+thresholds), world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras,
+F_source 'cameras'). The GIL is released while matching.)doc");
 }
 
 }  // namespace gimm::python

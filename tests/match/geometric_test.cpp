@@ -426,6 +426,100 @@ TEST_CASE("Geometric matcher on an exact scene: matches on the true point", "[ma
   CHECK(scene.on_truth(matches) >= 0.9 * double(matches.size()));
 }
 
+TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match][geometric]") {
+  const TwoCurveScene scene;
+  const Eigen::Vector3d iso = gimm::pair_isocentre(scene.ca, scene.cb);
+  // The radius term alone: the placement of a match is exp(-r / rank_radius_px), r the A
+  // radius at its sample (a flipped sign would rank wide vessels first).
+  gimm::GeometricOptions o;
+  o.rank_unary = 0, o.rank_chain_end = 0, o.rank_radius_px = 1.5;
+  const auto va = gimm::vessel_view(nullptr, &scene.ma, scene.ca, iso, o);
+  const auto vb = gimm::vessel_view(nullptr, &scene.mb, scene.cb, iso, o);
+  const auto sample_of = [&](const gimm::GeometricMatch& m) {
+    const auto& branch = va.graph.branches[static_cast<std::size_t>(m.branch)];
+    const auto idx = gimm::detail::resample_chain(branch, o.sample_px);
+    return std::pair{idx.size(), idx[static_cast<std::size_t>(m.sample)]};
+  };
+  auto matches = gimm::geometric_matches(va, vb, o);
+  REQUIRE(matches.size() >= 20);
+  const double scale = gimm::threshold_scale(scene.ca, scene.cb, o);
+  for (const auto& m : matches) {
+    const auto [n, at] = sample_of(m);
+    const double r = va.graph.branches[static_cast<std::size_t>(m.branch)].radius_px[at];
+    CHECK(m.placement == Approx(std::exp(-r / 1.5)));
+    CHECK(m.confidence == Approx(m.margin * m.placement));
+    CHECK(m.margin >= o.min_confidence * scale);  // the threshold is on the margin
+  }
+  // The chain-end term alone: the first and last two samples of a chain keep exp(-1).
+  o.rank_radius_px = 1e12, o.rank_chain_end = 1;
+  int ends = 0;
+  for (const auto& m : gimm::geometric_matches(va, vb, o)) {
+    const auto n = sample_of(m).first;
+    const auto k = static_cast<std::size_t>(m.sample);
+    const bool end = std::min(k, n - 1 - k) < 2;
+    ends += end;
+    CHECK(m.placement == Approx(end ? std::exp(-1.0) : 1.0));
+  }
+  CHECK(ends > 0);
+  // The unary term alone: a match further from its line is placed worse.
+  o.rank_chain_end = 0, o.rank_unary = 2.5;
+  const Eigen::Matrix3d F = gimm::fundamental_from_cameras(scene.ca, scene.cb);
+  for (const auto& m : gimm::geometric_matches(va, vb, o)) {
+    const double d = gimm::point_line_distance<double>(F * m.a.homogeneous(), m.b);
+    CHECK(m.placement <=
+          std::exp(-2.5 * o.w_epipolar * std::pow(d / o.epipolar_tolerance_px, 2)) + 1e-9);
+  }
+  // The long-chain term counts only when a view was segmented: the longer of the A chain and
+  // the B chain, in mm at the match's depth, beyond long_chain_mm.
+  o.rank_unary = 0, o.long_chain_mm = 20, o.long_chain_decay_mm = 5;
+  for (const auto& m : gimm::geometric_matches(va, vb, o)) CHECK(m.placement == Approx(1.0));
+  auto sa = va, sb = vb;
+  sa.segmented = sb.segmented = true;
+  const auto long_ones = gimm::geometric_matches(sa, sb, o);
+  REQUIRE(!long_ones.empty());
+  int shortened = 0;
+  for (const auto& m : long_ones) {
+    const double a_mm = gimm::detail::chain_length_px(sa.graph.branches[std::size_t(m.branch)]) /
+                        gimm::detail::pixels_per_mm(scene.ca, m.world);
+    double b_mm = 0, nearest = 1e300;  // the B chain m.b lies on
+    for (const auto& chain : sb.graph.branches)
+      for (const auto& p : chain.points)
+        if (const double d = (p - m.b).norm(); d < nearest)
+          nearest = d, b_mm = gimm::detail::chain_length_px(chain) /
+                              gimm::detail::pixels_per_mm(scene.cb, m.world);
+    const double excess = std::max(0.0, std::max(a_mm, b_mm) - 20.0);
+    shortened += excess > 0;
+    CHECK(m.placement == Approx(std::exp(-excess / 5.0)).margin(1e-6));
+  }
+  CHECK(shortened > 0);
+  // Bad ranking options are refused, naming them.
+  for (const auto& [u, r, e] :
+       {std::tuple{-1.0, 2.0, 1.0}, {2.5, 0.0, 1.0}, {2.5, 2.0, std::nan("")}}) {
+    gimm::GeometricOptions bad;
+    bad.rank_unary = u, bad.rank_radius_px = r, bad.rank_chain_end = e;
+    CHECK_THROWS_WITH(gimm::geometric_matches(va, vb, bad), Catch::Contains("rank_unary"));
+  }
+}
+
+TEST_CASE("Geometric matcher: the thresholds scale with pixels per mm", "[match][geometric]") {
+  gimm::GeometricOptions o;
+  // The reference is the 256 px phantom geometry (1 mm pixels, SID 1000, SOD 750): scale 1.
+  const gimm::Camerad a256 = carm_camera(30, 0, 256), b256 = carm_camera(-30, 0, 256);
+  CHECK(gimm::threshold_scale(a256, b256, o) == Approx(1.0));
+  // Twice the pixels over the same field: twice the threshold; coarser images keep it.
+  CHECK(gimm::threshold_scale(carm_camera(30, 0, 512), carm_camera(-30, 0, 512), o) == Approx(2.0));
+  CHECK(gimm::threshold_scale(carm_camera(30, 0, 384), carm_camera(-30, 0, 384), o) == Approx(1.5));
+  CHECK(gimm::threshold_scale(carm_camera(30, 0, 128), carm_camera(-30, 0, 128), o) == 1.0);
+  o.reference_px_per_mm = 0;  // off: the thresholds as given
+  CHECK(gimm::threshold_scale(carm_camera(30, 0, 512), carm_camera(-30, 0, 512), o) == 1.0);
+  // A reference far below the images' raises the threshold past every margin.
+  const TwoCurveScene scene;
+  o.reference_px_per_mm = 1e-6;
+  CHECK(scene.match(o).empty());
+  o.reference_px_per_mm = -1;
+  CHECK_THROWS_WITH(scene.match(o), Catch::Contains("reference_px_per_mm"));
+}
+
 TEST_CASE("Geometric matcher: the ordering term along a B chain", "[match][geometric]") {
   using gimm::detail::Candidate;
   using gimm::detail::ordering_cost;

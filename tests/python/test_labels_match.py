@@ -274,7 +274,18 @@ class Matching(unittest.TestCase):
                                       mask_b=rendered[1]["vessel_mask"], min_confidence=3.0)
         self.assertGreater(len(strict["confidence"]), 0)
         self.assertLess(len(strict["confidence"]), len(found["confidence"]))
-        self.assertTrue(np.all(strict["confidence"] >= 3.0))
+        # The threshold is on the margin: every match kept has a larger margin than every match
+        # it drops, and the kept matches are the default's, ranked as before.
+        # (a junction pixel ends two chains, so one place can be matched twice: the keys hold
+        # the confidence and the margin too)
+        def keys(r):
+            return [tuple(p) + tuple(q) + (c, m) for p, q, c, m in
+                    zip(r["points_a"], r["points_b"], r["confidence"], r["margin"])]
+        default, kept = keys(found), keys(strict)
+        self.assertTrue(set(kept) <= set(default))
+        dropped = [k[-1] for k in default if k not in set(kept)]
+        self.assertGreater(strict["margin"].min(), max(dropped))
+        self.assertTrue(np.all(found["confidence"] <= found["margin"]))
         with self.assertRaisesRegex(gimm.Error, "minimum confidences must be finite and >= 0"):
             gimm.match_geometric(image, image, a, b, min_confidence=-1.0)
         empty = gimm.match_geometric(np.full(image.shape, 0.8, np.float32),

@@ -32,9 +32,12 @@
 ///    its partner elsewhere (> ambiguity_px): two vessels overlap there in one view. When a view
 ///    was segmented, an A chain whose ends disagree in depth with every chain meeting them is off
 ///    the tree (off_tree_chains: a vessel matched to a rib or spine edge). Inconsistent,
-///    ambiguous and off-tree matches each keep a tenth of their confidence, so they rank after
-///    the others; matches below min_confidence (min_confidence_segmented when a view was
-///    segmented) are not reported.
+///    ambiguous and off-tree matches each keep a tenth of their margin, so they rank after the
+///    others; matches whose margin is below min_confidence (min_confidence_segmented when a view
+///    was segmented) are not reported.
+/// 5. The confidence that ranks the matches is the margin times how well the match is placed
+///    (GeometricOptions::rank_unary): thin vessels, near the line, away from chain ends, and
+///    when segmenting, not on a long unbranched chain.
 /// Matches carry the triangulated point (mm, world frame): the tree reconstructed on the way.
 #include <Eigen/Core>
 #include <algorithm>
@@ -70,11 +73,34 @@ struct GeometricOptions {
   /// ordering term. On the tuning set it did not pay (docs/geometric-matcher.md): the 3D step
   /// term already keeps the walk on course, and the states double (4x the DP's work).
   double w_order = 0.0;
+  /// Ranking. The DP margin saturates at no_match_cost when nothing in B rivals a sample, so
+  /// it does not say which of the unrivalled matches are placed best. The reported confidence
+  /// is the margin times exp(-(rank_unary u + r / rank_radius_px + rank_chain_end e)), u the
+  /// match's unary cost, r the A vessel's radius in pixels (a wide vessel places its
+  /// centerline less precisely, in pixels) and e = 1 on the first and last two samples of a
+  /// chain (thinning bends there, at junctions and tips). Chosen on the tuning sets (256 and
+  /// 512 px, docs/geometric-matcher.md); the minimum confidences below filter the margin.
+  double rank_unary = 2.5, rank_radius_px = 2.0, rank_chain_end = 1.0;
+  /// When a view was segmented, a match on a chain (of A or B) longer than long_chain_mm also
+  /// keeps exp(-(length - long_chain_mm) / long_chain_decay_mm) of its confidence: long
+  /// unbranched chains are spine and rib edges (and, on real images, catheters); coronary
+  /// branches between two bifurcations are shorter. 0 = off.
+  double long_chain_mm = 60.0, long_chain_decay_mm = 10.0;
   double min_confidence = 0.5;  ///< matches with a smaller margin are not reported
   /// The same when a view was segmented: its centerlines also hold what is not vessel (spine and
   /// rib edges), so a match must win by more (tuning set: Prec@3px 0.73 -> 0.79, coverage 0.43
   /// -> 0.20).
   double min_confidence_segmented = 1.0;
+  /// The two minimum margins hold at this many detector pixels per mm at the isocentre (the
+  /// phantom datasets at 256 px: 1000 px focal length, 750 mm to the isocentre) and grow in
+  /// proportion to the pair's own: samples are every sample_px pixels, so a finer image has
+  /// more samples, and more matches above a fixed margin, per mm of vessel, and the top K of a
+  /// sparse pair reach further down. On the 512 px tuning set the thresholds that keep the
+  /// 256 px share of the K slots were twice the 256 px ones, with masks and segmenting
+  /// (docs/geometric-matcher.md). Coarser images keep the thresholds as given: nothing was
+  /// measured there, and at 128 px half the threshold let weak matches into the top of an
+  /// exact scene's. 0 = the thresholds as given, at any resolution.
+  double reference_px_per_mm = 4.0 / 3.0;
   /// Candidates triangulating farther than this from the isocentre (where the two principal
   /// axes meet: the C-arm centres the heart) are not considered; 0 = no limit. Ribs, spine and
   /// catheters outside the heart are found by segmentation and are consistent 3D structures.
@@ -100,7 +126,9 @@ struct GeometricOptions {
 
 struct GeometricMatch {
   Eigen::Vector2d a, b;
-  double confidence = 0;
+  double confidence = 0;  ///< the ranking: margin x placement (GeometricOptions::rank_unary)
+  double margin = 0;      ///< the DP margin, after the tenths below (what is thresholded)
+  double placement = 1;   ///< how well the match is placed, in (0, 1]
   Eigen::Vector3d world;  ///< triangulated, mm
   bool consistent = false;
   bool unique = false;  ///< no other match claims a or b for a place elsewhere in the other view
@@ -128,6 +156,14 @@ struct Candidate {
   double unary = 0;
   double px_per_mm = 1;  ///< detector pixels per mm of the source view at `world`
 };
+
+/// Length of a chain along its points, in pixels.
+inline double chain_length_px(const Branch2d& chain) {
+  double length = 0;
+  for (std::size_t k = 1; k < chain.points.size(); ++k)
+    length += (chain.points[k] - chain.points[k - 1]).norm();
+  return length;
+}
 
 /// Detector pixels per mm at world point X (focal length over depth; orthographic: K's scale).
 inline double pixels_per_mm(const Camerad& camera, const Eigen::Vector3d& X) {
@@ -334,6 +370,10 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
   // The target chains indexed by the lines that can reach them; every line F a passes through
   // the epipole of `to`.
   const ChainIndex index(to.graph.branches, tol, detail::lines_common_point(F));
+  const bool segmented = from.segmented || to.segmented;
+  std::vector<double> to_length_px;  // of the target chains, for the long-chain term
+  for (const Branch2d& chain : to.graph.branches)
+    to_length_px.push_back(detail::chain_length_px(chain));
   std::vector<double> d;              // line_meetings' scratch
   std::vector<LineMeeting> meetings;  // of the current sample's line
   // One candidate set per sample.
@@ -360,6 +400,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
   for (std::size_t bi = 0; bi < from.graph.branches.size(); ++bi) {
     const Branch2d& branch = from.graph.branches[bi];
     const int branch_index = static_cast<int>(bi);
+    const double branch_length_px = detail::chain_length_px(branch);
     const std::vector<std::size_t> idx = detail::resample_chain(branch, o.sample_px);
     const std::size_t n = idx.size();
     std::vector<std::vector<detail::Candidate>> cand(n);
@@ -404,7 +445,17 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
       m.a = branch.points[idx[i]];
       m.b = c.b;
       m.world = c.world;
-      m.confidence = rival - marginal[i][best];
+      m.margin = rival - marginal[i][best];
+      const bool chain_end = std::min(i, n - 1 - i) < 2;
+      double misplaced = o.rank_unary * c.unary + branch.radius_px[idx[i]] / o.rank_radius_px +
+                         (chain_end ? o.rank_chain_end : 0.0);
+      if (segmented && o.long_chain_mm > 0) {
+        const double longest_mm =
+            std::max(branch_length_px / c.px_per_mm,
+                     to_length_px[c.chain] / detail::pixels_per_mm(to.camera, c.world));
+        misplaced += std::max(0.0, longest_mm - o.long_chain_mm) / o.long_chain_decay_mm;
+      }
+      m.placement = std::exp(-misplaced);
       m.branch = branch_index;
       m.sample = static_cast<int>(i);
       out.push_back(m);
@@ -439,6 +490,15 @@ inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_
   return v;
 }
 
+/// How much finer than reference_px_per_mm the pair's images are at the isocentre (the mean of
+/// the two views), at least 1; 1 when reference_px_per_mm is 0.
+inline double threshold_scale(const Camerad& a, const Camerad& b, const GeometricOptions& o) {
+  if (o.reference_px_per_mm == 0) return 1.0;
+  const Eigen::Vector3d iso = pair_isocentre(a, b);
+  const double px_per_mm = 0.5 * (detail::pixels_per_mm(a, iso) + detail::pixels_per_mm(b, iso));
+  return std::max(1.0, px_per_mm / o.reference_px_per_mm);
+}
+
 /// Both directions, made consistent (see the header comment).
 inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const VesselView& b,
                                                      const GeometricOptions& o) {
@@ -451,6 +511,17 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
              "geometric matcher: the minimum confidences must be finite and >= 0, got "
                  << o.min_confidence << " (masks) and " << o.min_confidence_segmented
                  << " (segmented)");
+  GIMM_CHECK(std::isfinite(o.rank_unary) && o.rank_unary >= 0 && std::isfinite(o.rank_radius_px) &&
+                 o.rank_radius_px > 0 && std::isfinite(o.rank_chain_end) && o.rank_chain_end >= 0 &&
+                 std::isfinite(o.long_chain_mm) && o.long_chain_mm >= 0 &&
+                 std::isfinite(o.long_chain_decay_mm) && o.long_chain_decay_mm > 0,
+             "geometric matcher: rank_unary, rank_chain_end and long_chain_mm must be finite and "
+             ">= 0, rank_radius_px and long_chain_decay_mm finite and > 0, got "
+                 << o.rank_unary << ", " << o.rank_chain_end << ", " << o.long_chain_mm << ", "
+                 << o.rank_radius_px << ", " << o.long_chain_decay_mm);
+  GIMM_CHECK(std::isfinite(o.reference_px_per_mm) && o.reference_px_per_mm >= 0,
+             "geometric matcher: reference_px_per_mm must be finite and >= 0, got "
+                 << o.reference_px_per_mm);
   GIMM_CHECK(std::isfinite(o.w_order) && o.w_order >= 0,
              "geometric matcher: the ordering cost must be finite and >= 0, got " << o.w_order);
   GIMM_CHECK(std::isfinite(o.junction_mm) && o.junction_mm >= 0 && o.junction_px > 0 &&
@@ -506,13 +577,15 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
                                          : std::vector<bool>();
   for (GeometricMatch& m : ab) {
     m.on_tree = off_tree.empty() || !off_tree[m.branch];
-    if (!m.consistent) m.confidence *= 0.1;
-    if (!m.unique) m.confidence *= 0.1;
-    if (!m.on_tree) m.confidence *= 0.1;
+    if (!m.consistent) m.margin *= 0.1;
+    if (!m.unique) m.margin *= 0.1;
+    if (!m.on_tree) m.margin *= 0.1;
+    m.confidence = m.margin * m.placement;
   }
-  const double min_confidence = segmented ? o.min_confidence_segmented : o.min_confidence;
+  const double min_confidence = (segmented ? o.min_confidence_segmented : o.min_confidence) *
+                                threshold_scale(a.camera, b.camera, o);
   ab.erase(std::remove_if(ab.begin(), ab.end(),
-                          [&](const GeometricMatch& m) { return m.confidence < min_confidence; }),
+                          [&](const GeometricMatch& m) { return m.margin < min_confidence; }),
            ab.end());
   return ab;
 }
