@@ -2,11 +2,13 @@
 // scale of a tube, 2D centerlines, and the matcher on an exact synthetic scene and on degenerate
 // input (no vessels, a camera for another image size, epipolar lines along a vessel).
 #include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "gimm/geometry/carm.hpp"
@@ -424,6 +426,42 @@ TEST_CASE("Geometric matcher on an exact scene: matches on the true point", "[ma
               gimm::fundamental_from_cameras(scene.ca, scene.cb) * m.a.homogeneous(), m.b) <=
           o.epipolar_tolerance_px);
   CHECK(scene.on_truth(matches) >= 0.9 * double(matches.size()));
+}
+
+TEST_CASE("Geometric matcher: a place where chains meet is reported once", "[match][geometric]") {
+  // A skeleton's junction pixel ends each chain that meets there, and each chain samples its
+  // ends: the longest chain of A is cut in two chains that start at its middle point.
+  const TwoCurveScene scene;
+  gimm::GeometricOptions o;
+  o.min_confidence = 0;  // every match the DP makes
+  const auto iso = gimm::pair_isocentre(scene.ca, scene.cb);
+  auto va = gimm::vessel_view(nullptr, &scene.ma, scene.ca, iso, o);
+  const auto vb = gimm::vessel_view(nullptr, &scene.mb, scene.cb, iso, o);
+  auto& branches = va.graph.branches;
+  const auto longest = std::max_element(branches.begin(), branches.end(), [](auto& x, auto& y) {
+    return x.points.size() < y.points.size();
+  });
+  const std::size_t half = longest->points.size() / 2;
+  REQUIRE(half >= 10);
+  gimm::Branch2d second;
+  second.points.assign(longest->points.begin() + long(half), longest->points.end());
+  second.radius_px.assign(longest->radius_px.begin() + long(half), longest->radius_px.end());
+  longest->points.resize(half + 1);
+  longest->radius_px.resize(half + 1);
+  std::reverse(longest->points.begin(), longest->points.end());  // both start at the junction
+  std::reverse(longest->radius_px.begin(), longest->radius_px.end());
+  branches.push_back(second);
+  const Eigen::Vector2d shared = branches.back().points.front();
+  const auto matches = gimm::geometric_matches(va, vb, o);
+  REQUIRE(matches.size() >= 20);
+  std::set<std::array<double, 4>> places;
+  int at_shared = 0;
+  for (const auto& m : matches) {
+    places.insert({m.a.x(), m.a.y(), m.b.x(), m.b.y()});
+    at_shared += m.a == shared;
+  }
+  CHECK(places.size() == matches.size());
+  CHECK(at_shared == 1);
 }
 
 TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match][geometric]") {

@@ -34,16 +34,19 @@
 ///    the tree (off_tree_chains: a vessel matched to a rib or spine edge). Inconsistent,
 ///    ambiguous and off-tree matches each keep a tenth of their margin, so they rank after the
 ///    others; matches whose margin is below min_confidence (min_confidence_segmented when a view
-///    was segmented) are not reported.
+///    was segmented) are not reported, and a place (a, b) that two chains both match (they meet
+///    at a junction pixel) is reported once.
 /// 5. The confidence that ranks the matches is the margin times how well the match is placed
 ///    (GeometricOptions::rank_unary): thin vessels, near the line, away from chain ends, and
 ///    when segmenting, not on a long unbranched chain.
 /// Matches carry the triangulated point (mm, world frame): the tree reconstructed on the way.
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <future>
 #include <limits>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -156,6 +159,31 @@ struct Candidate {
   double unary = 0;
   double px_per_mm = 1;  ///< detector pixels per mm of the source view at `world`
 };
+
+/// The matches with each place (a, b) once: a skeleton's junction pixel starts or ends every
+/// chain that meets there, so each of them may match it. The most confident stays, where the
+/// first of them was (the order keeps consecutive samples of a chain together).
+inline std::vector<GeometricMatch> one_per_place(std::vector<GeometricMatch> matches) {
+  using Place = std::array<double, 4>;
+  const auto place = [](const GeometricMatch& m) {
+    return Place{m.a.x(), m.a.y(), m.b.x(), m.b.y()};
+  };
+  std::map<Place, std::size_t> best;  // place -> index of its most confident match
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    const auto [at, inserted] = best.emplace(place(matches[k]), k);
+    if (!inserted && matches[k].confidence > matches[at->second].confidence) at->second = k;
+  }
+  if (best.size() == matches.size()) return matches;
+  std::vector<GeometricMatch> kept;
+  std::map<Place, bool> placed;
+  for (const GeometricMatch& m : matches) {
+    const Place p = place(m);
+    if (placed[p]) continue;
+    placed[p] = true;
+    kept.push_back(matches[best[p]]);
+  }
+  return kept;
+}
 
 /// Length of a chain along its points, in pixels.
 inline double chain_length_px(const Branch2d& chain) {
@@ -587,7 +615,7 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
   ab.erase(std::remove_if(ab.begin(), ab.end(),
                           [&](const GeometricMatch& m) { return m.margin < min_confidence; }),
            ab.end());
-  return ab;
+  return detail::one_per_place(std::move(ab));
 }
 
 /// The geometric matcher behind the matcher interface. Needs both cameras; uses the pair's
