@@ -3,6 +3,7 @@
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/geometry/carm.hpp"
+#include "gimm/geometry/correspondences.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/fundamental.hpp"
 #include "gimm/geometry/gate_options.hpp"

@@ -27,42 +27,12 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/rng.hpp"
+#include "gimm/geometry/correspondences.hpp"
 #include "gimm/geometry/epipolar.hpp"
 
 namespace gimm {
 
-template <class Scalar>
-using Points2 = Eigen::Matrix<Scalar, 2, Eigen::Dynamic>;
-template <class Scalar>
-using VectorX = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
-
 namespace detail {
-
-/// Validates correspondences and weights; returns the number with positive weight.
-template <class Scalar>
-Eigen::Index check_correspondences(const char* who, const Points2<Scalar>& x_a,
-                                   const Points2<Scalar>& x_b, const VectorX<Scalar>* weights,
-                                   Eigen::Index minimal) {
-  GIMM_CHECK(x_a.cols() == x_b.cols(),
-             who << ": x_a has " << x_a.cols() << " points but x_b has " << x_b.cols());
-  GIMM_CHECK(x_a.cols() >= minimal,
-             who << ": need at least " << minimal << " correspondences, got " << x_a.cols());
-  for (Eigen::Index i = 0; i < x_a.cols(); ++i)
-    GIMM_CHECK(x_a.col(i).allFinite() && x_b.col(i).allFinite(),
-               who << ": correspondence " << i << " has a non-finite coordinate (x_a = "
-                   << x_a.col(i).transpose() << ", x_b = " << x_b.col(i).transpose() << ")");
-  if (weights == nullptr) return x_a.cols();
-  GIMM_CHECK(weights->size() == x_a.cols(),
-             who << ": " << weights->size() << " weights for " << x_a.cols() << " points");
-  Eigen::Index positive = 0;
-  for (Eigen::Index i = 0; i < weights->size(); ++i) {
-    const Scalar w = (*weights)(i);
-    GIMM_CHECK(std::isfinite(w) && w >= 0,
-               who << ": weight " << i << " must be finite and >= 0, got " << w);
-    positive += w > 0;
-  }
-  return positive;
-}
 
 /// The paper's normalisation: weighted centroid mu, weighted mean distance d to it,
 /// s = sqrt(2) / d, T = [[s, 0, -s mu_x], [0, s, -s mu_y], [0, 0, 1]].
@@ -122,7 +92,7 @@ Scalar uniqueness_tolerance() {
 template <class Scalar>
 std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
                                                const Points2<Scalar>& x_b,
-                                               const VectorX<Scalar>& weights = {}) {
+                                               const VectorX<Scalar>& weights) {
   const bool weighted = weights.size() > 0;
   const Eigen::Index n = x_a.cols();
   const Eigen::Index positive = detail::check_correspondences<Scalar>(
@@ -154,6 +124,14 @@ std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
   const Matrix3<Scalar> F = Tb->transpose() * F_normalised * (*Ta);
   if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
   return normalize_fundamental(F);
+}
+
+/// The unweighted 8-point (every weight 1). An overload, not a default argument, so that
+/// gating.hpp can declare the weighted one alone (see there).
+template <class Scalar>
+std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
+                                               const Points2<Scalar>& x_b) {
+  return fundamental_8pt<Scalar>(x_a, x_b, VectorX<Scalar>());
 }
 
 /// Affine fundamental matrix F = [[0, 0, a], [0, 0, b], [c, d, e]] of two orthographic views:
