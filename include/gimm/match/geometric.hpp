@@ -175,13 +175,11 @@ inline std::vector<GeometricMatch> one_per_place(std::vector<GeometricMatch> mat
   }
   if (best.size() == matches.size()) return matches;
   std::vector<GeometricMatch> kept;
-  std::map<Place, bool> placed;
-  for (const GeometricMatch& m : matches) {
-    const Place p = place(m);
-    if (placed[p]) continue;
-    placed[p] = true;
-    kept.push_back(matches[best[p]]);
-  }
+  for (const GeometricMatch& m : matches)
+    if (const auto at = best.find(place(m)); at != best.end()) {
+      kept.push_back(matches[at->second]);
+      best.erase(at);  // the place is taken
+    }
   return kept;
 }
 
