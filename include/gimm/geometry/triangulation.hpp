@@ -92,34 +92,48 @@ Scalar reprojection_error(const Camera<Scalar>& camera, const Eigen::Matrix<Scal
 
 /// Two views in closed form (no SVD): the midpoint of the common perpendicular of two rays,
 /// nullopt when they are parallel. The geometric matcher triangulates every candidate with it.
-inline std::optional<Eigen::Vector3d> two_ray_midpoint(const Ray<double>& r1,
-                                                       const Ray<double>& r2) {
-  const Eigen::Vector3d w0 = r1.origin - r2.origin;
-  const double b = r1.direction.dot(r2.direction), d = r1.direction.dot(w0),
+template <class Scalar>
+std::optional<Eigen::Matrix<Scalar, 3, 1>> two_ray_midpoint(const Ray<Scalar>& r1,
+                                                            const Ray<Scalar>& r2) {
+  const Eigen::Matrix<Scalar, 3, 1> w0 = r1.origin - r2.origin;
+  const Scalar b = r1.direction.dot(r2.direction), d = r1.direction.dot(w0),
                e = r2.direction.dot(w0);
-  const double denom = 1 - b * b;
-  if (!(denom > 1e-12)) return std::nullopt;
-  const double s = (b * e - d) / denom, t = (e - b * d) / denom;
-  return 0.5 * ((r1.origin + s * r1.direction) + (r2.origin + t * r2.direction));
+  const Scalar denom = 1 - b * b;
+  if (!(denom > Scalar(1e-12))) return std::nullopt;
+  const Scalar s = (b * e - d) / denom, t = (e - b * d) / denom;
+  return Scalar(0.5) * ((r1.origin + s * r1.direction) + (r2.origin + t * r2.direction));
 }
 
 /// The principal axes' closest point: the isocentre of a C-arm pair (for the magnification).
-inline Eigen::Vector3d pair_isocentre(const Camerad& a, const Camerad& b) {
-  const auto centre = [](const Camerad& c) { return c.ray(c.K()(0, 2), c.K()(1, 2)); };
+template <class Scalar>
+Eigen::Matrix<Scalar, 3, 1> pair_isocentre(const Camera<Scalar>& a, const Camera<Scalar>& b) {
+  const auto centre = [](const Camera<Scalar>& c) { return c.ray(c.K()(0, 2), c.K()(1, 2)); };
   const auto X = two_ray_midpoint(centre(a), centre(b));
   GIMM_CHECK(X, "pair_isocentre: the two views look along parallel axes (no isocentre)");
   return *X;
 }
 
-// The double instantiations above are the costly ones to compile (Eigen decompositions):
-// gimm's own binaries compile them once (src/instances/) and see them as extern here.
-// Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
-#define GIMM_TRIANGULATION_INSTANCES(EXTERN)                                                \
-  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_dlt<double>(       \
-      const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&); \
-  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_midpoint<double>(  \
+// gimm's own binaries compile the double instantiations once (src/instances/) and see them as
+// extern here: the decompositions are costly to compile, and the matchers' headers then need
+// only declarations of the rest (match/geometric.hpp, match/reconstruct.hpp), so a change here
+// does not recompile every file that matches. Consumers do not define GIMM_EXTERN_INSTANCES and
+// instantiate them as usual.
+// The DLT (a dynamic-size SVD) takes as long to compile as the rest: a file of its own each.
+#define GIMM_TRIANGULATION_DLT_INSTANCES(EXTERN)                                      \
+  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_dlt<double>( \
       const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&);
+#define GIMM_TRIANGULATION_INSTANCES(EXTERN)                                                \
+  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_midpoint<double>(  \
+      const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&); \
+  EXTERN template double reprojection_error<double>(const Camera<double>&,                  \
+                                                    const Eigen::Matrix<double, 3, 1>&,     \
+                                                    const Eigen::Matrix<double, 2, 1>&);    \
+  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> two_ray_midpoint<double>(      \
+      const Ray<double>&, const Ray<double>&);                                              \
+  EXTERN template Eigen::Matrix<double, 3, 1> pair_isocentre<double>(const Camera<double>&, \
+                                                                     const Camera<double>&);
 #ifdef GIMM_EXTERN_INSTANCES
+GIMM_TRIANGULATION_DLT_INSTANCES(extern)
 GIMM_TRIANGULATION_INSTANCES(extern)
 #endif
 
