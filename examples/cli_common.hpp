@@ -15,6 +15,10 @@
 #include "gimm/nn/shipped_weights.hpp"
 #include "gimm/version.hpp"
 
+#if defined(__GLIBC__)
+#include <malloc.h>  // mallopt
+#endif
+
 namespace gimm::cli {
 
 /// Where the shipped weights are looked for, after $GIMM_WEIGHTS: the install tree
@@ -143,6 +147,21 @@ inline void check_numbers(CLI::App& app) {
 inline std::string program_name(const CLI::App& app, int argc, char** argv) {
   if (!app.get_name().empty()) return app.get_name();
   return argc > 0 ? std::filesystem::path(argv[0]).filename().string() : std::string("gimm");
+}
+
+/// gimm-match's allocator policy: it allocates and frees the same large images for every pair.
+/// glibc gives freed memory back to the system as soon as a few MB of it sit free at the top of
+/// the heap, and getting it back costs a page fault per 4 KB page: on one machine (2026-12-05)
+/// that was half of gimm-match's time with the geometric matcher segmenting. Freed memory up to
+/// 256 MB stays mapped for the next pair instead (peak memory within 2 MB). Not for
+/// gimm-dataset: there it cost 10% of the time and 40 MB of peak memory on a CT-size patient
+/// (docs/performance.md, "Geometric matcher"). Other C libraries: their own policy.
+inline void keep_freed_memory() {
+#if defined(__GLIBC__)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // images come from the heap, not one mapping each
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  mallopt(M_TOP_PAD, 64 << 20);
+#endif
 }
 
 /// The command-line contract of every gimm CLI: parses `argv` into `app`, then runs `body`.

@@ -290,6 +290,7 @@ int main(int argc, char** argv) {
   app.add_option("--picture", picture, "PNG of the two views with the matches drawn");
 
   return gimm::cli::run(app, argc, argv, [&] {
+    gimm::cli::keep_freed_memory();
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
     // The learned matcher's weights (given or shipped) and the flags given for it; what no flag
