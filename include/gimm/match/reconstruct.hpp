@@ -19,7 +19,7 @@
 #include "gimm/match/matches.hpp"
 
 #ifdef GIMM_EXTERN_INSTANCES
-// gimm's own binaries compile the two below once (src/instances/triangulation.cpp): declaring
+// gimm's own binaries compile the two below once (src/instances/triangulation*.cpp): declaring
 // them keeps a change to geometry/triangulation.hpp from recompiling every matcher's command
 // line (docs/performance.md, "Build").
 namespace gimm {
