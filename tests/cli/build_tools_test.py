@@ -14,16 +14,14 @@ TOOLS = os.path.join(HERE, "..", "..", "benchmarks", "build")
 LAUNCHER = os.path.join(TOOLS, "log_compile.sh")
 COST = os.path.join(TOOLS, "header_cost.py")
 
+sys.path.insert(0, HERE)
+from harness import Harness  # noqa: E402
+
 TMP = os.path.abspath(sys.argv[1])
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
+h = Harness(TOOLS)
+check = h.check
 
 
 def run(args, env=None):
@@ -91,5 +89,4 @@ r = run([sys.executable, COST, build, os.path.join(TMP, "broken.tsv")])
 check(r.returncode != 0 and "broken.tsv:1" in r.stderr,
       f"header_cost: a malformed log line is named, got {r.returncode} {r.stderr!r}")
 
-print(f"build_tools: {len(failures)} failures")
-sys.exit(1 if failures else 0)
+h.finish("build_tools")
