@@ -61,3 +61,22 @@ TEST_CASE("Image sizes: empty and negative", "[core][image]") {
   CHECK_THROWS_AS(Image<int>(-1, 4), gimm::Error);
   CHECK_THROWS_WITH(Image<int>(3, -2), Catch::Matchers::Contains("3 x -2"));
 }
+
+TEST_CASE("Image::resize keeps the storage it has room in", "[core][image]") {
+  Image<int> im(4, 6, 1);
+  const int* storage = im.data();
+  im.resize(3, 5);  // smaller: the same memory
+  CHECK(im.rows() == 3);
+  CHECK(im.cols() == 5);
+  CHECK(im.size() == 15u);
+  CHECK(im.data() == storage);
+  CHECK_FALSE(im.contains(3, 0));
+  CHECK(im.contains(2, 4));
+  im.resize(6, 4);  // back up to the size it had: still the same memory
+  CHECK(im.size() == 24u);
+  CHECK(im.data() == storage);
+  im.resize(0, 0);
+  CHECK(im.empty());
+  CHECK_THROWS_WITH(im.resize(2, -3), Catch::Matchers::Contains("2 x -3"));
+  CHECK(im.size() == 0u);  // a refused resize leaves the image as it was
+}

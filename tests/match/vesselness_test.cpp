@@ -1,12 +1,16 @@
 // The fast paths of the vessel segmentation against their slow references: the float,
 // vectorised vesselness (half resolution for wide scales) against the double-precision kernels,
 // the vectorised Hessian eigenvalues against the 2x2 rule, the table-driven thinning against the
-// plain Zhang-Suen rule, and the two-thread geometric matcher against one thread.
+// plain Zhang-Suen rule, the two-thread geometric matcher against one thread, and working memory
+// kept between calls against fresh memory.
+#include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <random>
+#include <string>
 
 #include "gimm/geometry/carm.hpp"
 #include "gimm/match/geometric.hpp"
@@ -135,7 +139,8 @@ TEST_CASE("Vectorised Hessian eigenvalues agree with the per-pixel 2x2 rule",
     if (i % 17 == 0) xy.data()[i] = 0;
   }
   for (const double s : {1.0, 1.7}) {
-    const auto e = gimm::detail::scale_eigen(xx, xy, yy, s);
+    gimm::detail::ScaleEigen e;
+    gimm::detail::scale_eigen(xx, xy, yy, s, e);
     const float n = static_cast<float>(s * s);
     int swapped = 0;
     for (std::size_t i = 0; i < xx.size(); ++i) {
@@ -179,14 +184,22 @@ TEST_CASE("Table-driven thinning equals the plain Zhang-Suen rule", "[match][ves
   }
 }
 
-TEST_CASE("Geometric matcher: two threads give the one-thread result", "[match][vesselness]") {
+namespace {
+
+/// Two 3D curves drawn dark into two views of `size` px, so that the images are segmented and
+/// matched; the images live in the returned struct, the pair points at them.
+struct CurvesPair {
+  gimm::Image<float> a, b;
+  gimm::PairInput pair;
+};
+
+std::unique_ptr<CurvesPair> curves_pair(int size) {
   gimm::CArm ga, gb;
   ga.primary_deg = 30;
   gb.primary_deg = -30;
   gb.secondary_deg = 15;
-  for (gimm::CArm* g : {&ga, &gb}) g->rows = g->cols = 128, g->pixel_mm = 2.0;
+  for (gimm::CArm* g : {&ga, &gb}) g->rows = g->cols = size, g->pixel_mm = 256.0 / size;
   const gimm::Camerad ca = ga.camera(), cb = gb.camera();
-  // Two 3D curves drawn dark into both views, so that the images are segmented and matched.
   const auto draw = [](const gimm::Camerad& cam) {
     gimm::Image<float> im(cam.rows(), cam.cols(), 0.9f);
     for (int k = 0; k <= 2000; ++k) {
@@ -204,23 +217,100 @@ TEST_CASE("Geometric matcher: two threads give the one-thread result", "[match][
     }
     return im;
   };
-  const gimm::Image<float> a = draw(ca), b = draw(cb);
-  gimm::PairInput pair;
-  pair.id = "bars";
-  pair.image_a = &a;
-  pair.image_b = &b;
-  pair.camera_a = ca;
-  pair.camera_b = cb;
-  gimm::GeometricOptions one, two;
-  one.two_threads = false;
-  two.two_threads = true;
-  const auto m1 = gimm::GeometricMatcher(one).match_with_points(pair);
-  const auto m2 = gimm::GeometricMatcher(two).match_with_points(pair);
-  REQUIRE(m1.size() >= 10);
+  auto out = std::make_unique<CurvesPair>();
+  out->a = draw(ca);
+  out->b = draw(cb);
+  out->pair.id = "curves-" + std::to_string(size);
+  out->pair.image_a = &out->a;
+  out->pair.image_b = &out->b;
+  out->pair.camera_a = ca;
+  out->pair.camera_b = cb;
+  return out;
+}
+
+void check_same_matches(const std::vector<gimm::GeometricMatch>& m1,
+                        const std::vector<gimm::GeometricMatch>& m2) {
   REQUIRE(m1.size() == m2.size());
   for (std::size_t i = 0; i < m1.size(); ++i) {
     CHECK(m1[i].a == m2[i].a);
     CHECK(m1[i].b == m2[i].b);
     CHECK(m1[i].confidence == m2[i].confidence);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Geometric matcher: two threads give the one-thread result", "[match][vesselness]") {
+  const auto curves = curves_pair(128);
+  gimm::GeometricOptions one, two;
+  one.two_threads = false;
+  two.two_threads = true;
+  const auto m1 = gimm::GeometricMatcher(one).match_with_points(curves->pair);
+  const auto m2 = gimm::GeometricMatcher(two).match_with_points(curves->pair);
+  REQUIRE(m1.size() >= 10);
+  check_same_matches(m1, m2);
+}
+
+TEST_CASE("Kept buffers give what fresh ones give, image after image", "[match][vesselness]") {
+  // One set of buffers through images of other sizes and content, a flat one (no structure),
+  // options that drop the half-resolution scales and the exact path: whatever an earlier call
+  // left in them must not show in a later result.
+  gimm::SegmentationBuffers seg;
+  gimm::CenterlineBuffers lines;
+  gimm::TopHatBuffers top_hat;
+  gimm::SegmentationOptions halved, full_res, exact;
+  full_res.vesselness.half_resolution_from_px = 0;
+  exact.vesselness.exact_derivatives = true;
+  halved.vesselness.scales_px = full_res.vesselness.scales_px =
+      exact.vesselness.scales_px = {1.0, 2.0, 3.0};
+  const gimm::Image<float> flat(40, 40, 0.5f);
+  struct Step {
+    const gimm::Image<float>* image;
+    const gimm::SegmentationOptions* options;
+  };
+  const gimm::Image<float> big = bars_scene(160), small = bars_scene(96);
+  std::size_t lit_steps = 0;
+  for (const Step& step : {Step{&big, &halved}, Step{&small, &full_res}, Step{&flat, &halved},
+                           Step{&big, &exact}, Step{&small, &halved}, Step{&big, &halved}}) {
+    const gimm::Image<float>& im = *step.image;
+    INFO(im.rows() << " px, exact " << step.options->vesselness.exact_derivatives << ", halving "
+                   << step.options->vesselness.half_resolution_from_px);
+    gimm::Image<std::uint8_t> mask(3, 3, 7);  // an output with stale pixels of another size
+    gimm::segment_vessels(im, *step.options, mask, seg);
+    const gimm::Image<std::uint8_t> fresh = gimm::segment_vessels(im, *step.options);
+    REQUIRE(mask.rows() == fresh.rows());
+    REQUIRE(mask.cols() == fresh.cols());
+    CHECK(mask.storage() == fresh.storage());
+    lit_steps += std::count(mask.storage().begin(), mask.storage().end(), 1) > 100;
+    gimm::Image<float> v;
+    gimm::vesselness(im, step.options->vesselness, v, seg.vesselness);
+    CHECK(v.storage() == gimm::vesselness(im, step.options->vesselness).storage());
+    gimm::Image<float> hat;
+    gimm::black_top_hat(im, 7, hat, top_hat);
+    CHECK(hat.storage() == gimm::black_top_hat(im, 7).storage());
+    const gimm::CenterlineGraph2d kept = gimm::centerline_graph(fresh, 5, lines),
+                                  again = gimm::centerline_graph(fresh);
+    REQUIRE(kept.branches.size() == again.branches.size());
+    for (std::size_t k = 0; k < kept.branches.size(); ++k) {
+      CHECK(kept.branches[k].points == again.branches[k].points);
+      CHECK(kept.branches[k].radius_px == again.branches[k].radius_px);
+    }
+  }
+  CHECK(lit_steps == 5);  // all but the flat image found their bars
+}
+
+TEST_CASE("Geometric matcher: one matcher, pair after pair, gives a fresh matcher's result",
+          "[match][vesselness]") {
+  // The matcher keeps its views' buffers between pairs (ViewBufferPool): pairs of two sizes in
+  // turn, each against a new matcher's answer; and copies of the matcher share the pool.
+  const auto p128 = curves_pair(128), p96 = curves_pair(96);
+  const gimm::GeometricMatcher kept;
+  const gimm::GeometricMatcher copy = kept;
+  for (const CurvesPair* p : {p128.get(), p96.get(), p128.get(), p96.get()}) {
+    INFO(p->pair.id);
+    const auto fresh = gimm::GeometricMatcher().match_with_points(p->pair);
+    REQUIRE(fresh.size() >= 5);
+    check_same_matches(kept.match_with_points(p->pair), fresh);
+    check_same_matches(copy.match_with_points(p->pair), fresh);
   }
 }

@@ -38,7 +38,7 @@ inline void convolve_rows(const Image<float>& in, const std::vector<float>& kern
                           Image<float>& out) {
   const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
   const int taps = static_cast<int>(kernel.size());
-  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
+  out.resize(rows, cols);  // every pixel is written below
   std::vector<float> line(static_cast<std::size_t>(cols + 2 * half));
   // out(c) = sum_k K[k] in(c - k): tap j of the line is in(c + j - half), weight K[taps - 1 - j].
   const auto weight = [&](int j) { return kernel[static_cast<std::size_t>(taps - 1 - j)]; };
@@ -69,7 +69,7 @@ inline void convolve_rows(const Image<float>& in, const std::vector<float>& kern
 inline void convolve_cols(const Image<float>& in, const std::vector<float>& kernel,
                           Image<float>& out) {
   const int half = static_cast<int>(kernel.size() / 2), rows = in.rows(), cols = in.cols();
-  if (out.rows() != rows || out.cols() != cols) out = Image<float>(rows, cols);
+  out.resize(rows, cols);  // every pixel is written below
   // out(r) = sum_k K[half + k] in(r - k)
   const auto weight = [&](int k) { return kernel[static_cast<std::size_t>(k + half)]; };
   const auto row = [&](int r) {

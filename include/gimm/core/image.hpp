@@ -21,6 +21,17 @@ class Image {
     data_.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols), fill);
   }
 
+  /// Make this a rows x cols image in the storage it has when that is large enough, so a buffer
+  /// kept between calls is not allocated (and its pages touched for the first time) again. The
+  /// pixels' values are unspecified: the caller overwrites every one.
+  void resize(int rows, int cols) {
+    GIMM_CHECK(rows >= 0 && cols >= 0,
+               "Image: rows and cols must be non-negative, got " << rows << " x " << cols);
+    data_.resize(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols));
+    rows_ = rows;
+    cols_ = cols;
+  }
+
   int rows() const { return rows_; }
   int cols() const { return cols_; }
   std::size_t size() const { return data_.size(); }

@@ -17,7 +17,7 @@ namespace detail {
 /// out(i, c) = pick over in(i - half .. i + half, c), the window clipped to the rows. Whole rows
 /// at a time, so the inner loops run along contiguous memory and vectorise.
 template <class Pick>
-Image<float> extreme_down_columns(const Image<float>& in, int half, Pick pick) {
+void extreme_down_columns(const Image<float>& in, int half, Pick pick, Image<float>& out) {
   const int n = in.rows(), cols = in.cols(), width = 2 * half + 1;
   // Padded row j is input row j - half (clamped: the edge rows repeat). The window of output row
   // i is padded rows i .. i + width - 1. Blocks of `width` padded rows starting at b: for output
@@ -29,7 +29,7 @@ Image<float> extreme_down_columns(const Image<float>& in, int half, Pick pick) {
   const auto combine = [&](const float* x, const float* y, float* out) {
     for (int c = 0; c < cols; ++c) out[c] = pick(x[c], y[c]);
   };
-  Image<float> out(n, cols);
+  out.resize(n, cols);
   for (int b = 0; b < n; b += width) {
     std::copy(source(b + width - 1), source(b + width - 1) + cols, row(behind, width - 1));
     for (int k = width - 2; k >= 0; --k) combine(row(behind, k + 1), source(b + k), row(behind, k));
@@ -40,7 +40,6 @@ Image<float> extreme_down_columns(const Image<float>& in, int half, Pick pick) {
     for (int i = b + 1; i < std::min(b + width, n); ++i)
       combine(row(behind, i - b), row(ahead, i - b - 1), &out(i, 0));
   }
-  return out;
 }
 
 /// out[i] = pick over x[i - half .. i + half], clipped to [0, n): the blocks of
@@ -61,37 +60,68 @@ void extreme_along_row(const float* x, int n, int half, Pick pick, float* out, f
   }
 }
 
-/// The square-window running extreme of an image: along the rows, then down the columns.
+/// The square-window running extreme of an image into `out`: along the rows (into `along`),
+/// then down the columns. `along` and `out` are resized; `out` must not be `in`.
 template <class Pick>
-Image<float> square_extreme(const Image<float>& in, int width, Pick pick) {
+void square_extreme(const Image<float>& in, int width, Pick pick, Image<float>& along,
+                    Image<float>& out) {
   GIMM_CHECK(width >= 1 && width % 2 == 1,
              "morphology: the window width must be odd and >= 1 px, got " << width);
-  if (in.empty()) return in;
+  GIMM_ASSERT(&in != &out && &in != &along);
   const int half = width / 2;
-  Image<float> along(in.rows(), in.cols());
+  along.resize(in.rows(), in.cols());
   std::vector<float> behind(static_cast<std::size_t>(width)), ahead(behind.size());
   for (int r = 0; r < in.rows(); ++r)
     extreme_along_row(&in(r, 0), in.cols(), half, pick, &along(r, 0), behind.data(), ahead.data());
-  return extreme_down_columns(along, half, pick);
+  extreme_down_columns(along, half, pick, out);
 }
+
+template <class Pick>
+Image<float> square_extreme(const Image<float>& in, int width, Pick pick) {
+  Image<float> along, out;
+  square_extreme(in, width, pick, along, out);
+  return out;
+}
+
+// Function objects, not function pointers: the picks inline into the vectorised loops.
+struct PickMax {
+  float operator()(float a, float b) const { return std::max(a, b); }
+};
+struct PickMin {
+  float operator()(float a, float b) const { return std::min(a, b); }
+};
 
 }  // namespace detail
 
 /// Grey dilation (maximum) over a width x width window; width odd.
 inline Image<float> grey_dilate(const Image<float>& in, int width) {
-  return detail::square_extreme(in, width, [](float a, float b) { return std::max(a, b); });
+  return detail::square_extreme(in, width, detail::PickMax{});
 }
 
 /// Grey erosion (minimum) over a width x width window; width odd.
 inline Image<float> grey_erode(const Image<float>& in, int width) {
-  return detail::square_extreme(in, width, [](float a, float b) { return std::min(a, b); });
+  return detail::square_extreme(in, width, detail::PickMin{});
 }
 
-/// Black top-hat: closing (dilation, then erosion) minus the image, >= 0. A dark structure
-/// narrower than `width` is filled by the closing and kept; wider ones and steps (edges) are not.
-inline Image<float> black_top_hat(const Image<float>& in, int width) {
-  Image<float> out = grey_erode(grey_dilate(in, width), width);
+/// The working images of black_top_hat(), for a caller that keeps them between calls.
+struct TopHatBuffers {
+  Image<float> along, dilated;
+};
+
+/// Black top-hat into `out` (resized; not `in`): closing (dilation, then erosion) minus the
+/// image, >= 0. A dark structure narrower than `width` is filled by the closing and kept; wider
+/// ones and steps (edges) are not.
+inline void black_top_hat(const Image<float>& in, int width, Image<float>& out,
+                          TopHatBuffers& buffers) {
+  detail::square_extreme(in, width, detail::PickMax{}, buffers.along, buffers.dilated);
+  detail::square_extreme(buffers.dilated, width, detail::PickMin{}, buffers.along, out);
   for (std::size_t i = 0; i < out.size(); ++i) out.data()[i] -= in.data()[i];
+}
+
+inline Image<float> black_top_hat(const Image<float>& in, int width) {
+  Image<float> out;
+  TopHatBuffers buffers;
+  black_top_hat(in, width, out, buffers);
   return out;
 }
 

@@ -112,18 +112,30 @@ inline const std::array<std::array<bool, 256>, 2>& zhang_suen_table() {
 
 }  // namespace detail
 
-/// One-pixel-wide skeleton of a binary mask (nonzero = foreground), Zhang-Suen. The mask is
-/// copied into a frame one pixel wider (no bounds checks), and each pixel's neighbourhood is
+/// The working memory of thin_mask() and centerline_graph(), for a caller that keeps it between
+/// calls (a matcher, view after view): at one image size it is allocated once.
+struct CenterlineBuffers {
+  std::vector<std::uint8_t> framed, queued;  // thin_mask's framed copy and its queue marks
+  std::array<std::vector<int>, 2> to_check;
+  std::vector<int> checking, remove;
+  Image<std::uint8_t> skeleton, binary, node, used;
+};
+
+/// One-pixel-wide skeleton of a binary mask (nonzero = foreground) into `out`, Zhang-Suen. The mask
+/// is copied into a frame one pixel wider (no bounds checks), and each pixel's neighbourhood is
 /// looked up in a 256-entry table. A sub-iteration looks only at the pixels whose neighbourhood
 /// changed since that sub-iteration last kept them (at first, all): the others would be kept
 /// again. Each sub-iteration still removes what the plain rule removes, from the same state.
 template <class T>
-Image<std::uint8_t> thin_mask(const Image<T>& mask) {
+void thin_mask(const Image<T>& mask, Image<std::uint8_t>& out, CenterlineBuffers& buffers) {
   const int rows = mask.rows(), cols = mask.cols(), stride = cols + 2;
-  std::vector<std::uint8_t> m(static_cast<std::size_t>(rows + 2) * stride, 0);
+  std::vector<std::uint8_t>& m = buffers.framed;
+  m.assign(static_cast<std::size_t>(rows + 2) * stride, 0);
   // to_check[p]: the pixels sub-iteration p has to look at; `queued` bit p marks them.
-  std::array<std::vector<int>, 2> to_check;
-  std::vector<std::uint8_t> queued(m.size(), 0);
+  std::array<std::vector<int>, 2>& to_check = buffers.to_check;
+  to_check[0].clear();
+  std::vector<std::uint8_t>& queued = buffers.queued;
+  queued.assign(m.size(), 0);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       if (mask(r, c) != T(0)) {
@@ -136,7 +148,7 @@ Image<std::uint8_t> thin_mask(const Image<T>& mask) {
   std::array<int, 8> offset{};  // kRing as index offsets in the framed buffer
   for (int k = 0; k < 8; ++k) offset[k] = detail::kRingOffsetOf(k, stride);
   const auto& table = detail::zhang_suen_table();
-  std::vector<int> checking, remove;
+  std::vector<int>&checking = buffers.checking, &remove = buffers.remove;
   for (int pass = 0; !to_check[0].empty() || !to_check[1].empty(); pass = 1 - pass) {
     checking.swap(to_check[pass]);
     to_check[pass].clear();
@@ -162,26 +174,40 @@ Image<std::uint8_t> thin_mask(const Image<T>& mask) {
           }
       }
   }
-  Image<std::uint8_t> out(rows, cols, 0);
+  out.resize(rows, cols);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       out(r, c) = m[static_cast<std::size_t>((r + 1) * stride + c + 1)];
+}
+
+template <class T>
+Image<std::uint8_t> thin_mask(const Image<T>& mask) {
+  Image<std::uint8_t> out;
+  CenterlineBuffers buffers;
+  thin_mask(mask, out, buffers);
   return out;
 }
 
-/// The centerline graph of a vessel mask (nonzero = vessel).
+/// The centerline graph of a vessel mask (nonzero = vessel), in `buffers`' working memory.
 template <class T>
-CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px = 5) {
+CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px,
+                                   CenterlineBuffers& buffers) {
   GIMM_CHECK(min_branch_px >= 2,
              "centerline_graph: min_branch_px must be >= 2, got " << min_branch_px);
-  const Image<std::uint8_t> skel = thin_mask(mask);
-  Image<std::uint8_t> binary(mask.rows(), mask.cols(), 0);
+  Image<std::uint8_t>& skel = buffers.skeleton;
+  thin_mask(mask, skel, buffers);
+  Image<std::uint8_t>& binary = buffers.binary;
+  binary.resize(mask.rows(), mask.cols());
   for (std::size_t i = 0; i < mask.size(); ++i) binary.data()[i] = mask.data()[i] != T(0);
   CenterlineGraph2d g;
   g.rows = mask.rows();
   g.cols = mask.cols();
   const int rows = skel.rows(), cols = skel.cols();
-  Image<std::uint8_t> node(rows, cols, 0), used(rows, cols, 0);
+  Image<std::uint8_t>&node = buffers.node, &used = buffers.used;
+  for (Image<std::uint8_t>* im : {&node, &used}) {
+    im->resize(rows, cols);
+    std::fill(im->storage().begin(), im->storage().end(), std::uint8_t{0});
+  }
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       if (skel(r, c)) {
@@ -248,6 +274,12 @@ CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px = 5) 
       }
     }
   return g;
+}
+
+template <class T>
+CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px = 5) {
+  CenterlineBuffers buffers;
+  return centerline_graph(mask, min_branch_px, buffers);
 }
 
 }  // namespace gimm

@@ -121,9 +121,10 @@ inline void eigen_2x2(float xx, float xy, float yy, float& l1, float& l2) {
 /// scalar one; it has no overflow guard, so Hessian entries past about 1e19 would give NaN where
 /// the scalar rule gives infinities: far beyond any image's), then the pair ordered by magnitude
 /// without a branch (|mean - root| > |mean + root| when mean < 0 and root > 0; equal otherwise).
-inline ScaleEigen scale_eigen(const Image<float>& xx, const Image<float>& xy,
-                              const Image<float>& yy, double s) {
-  ScaleEigen e{Image<float>(xx.rows(), xx.cols()), Image<float>(xx.rows(), xx.cols())};
+inline void scale_eigen(const Image<float>& xx, const Image<float>& xy, const Image<float>& yy,
+                        double s, ScaleEigen& e) {
+  e.l1.resize(xx.rows(), xx.cols());
+  e.l2.resize(xx.rows(), xx.cols());
   const float n = static_cast<float>(s * s);
   const auto size = static_cast<Eigen::Index>(xx.size());
   const Eigen::Map<const Eigen::ArrayXf> a(xx.data(), size), b(xy.data(), size), c(yy.data(), size);
@@ -137,41 +138,44 @@ inline ScaleEigen scale_eigen(const Image<float>& xx, const Image<float>& xy,
     l1[i] = mean - toward;
     l2[i] = mean + toward;
   }
-  return e;
 }
 
-/// Reference: sampled Gaussian-derivative kernels, one set per scale.
-inline std::vector<ScaleEigen> eigen_exact(const Image<float>& image,
-                                           const std::vector<double>& scales) {
-  std::vector<ScaleEigen> out;
-  for (double s : scales) {
+/// The fast path's derivative images, reused from scale to scale (and call to call).
+struct DerivativeBuffers {
+  std::array<Image<float>, 3> along_x;  // the image convolved along x with G, G', G''
+  Image<float> xx, xy, yy;
+};
+
+/// Reference: sampled Gaussian-derivative kernels, one set per scale, into `out[scale]`.
+inline void eigen_exact(const Image<float>& image, const std::vector<double>& scales,
+                        std::vector<ScaleEigen>& out) {
+  out.resize(scales.size());
+  for (std::size_t i = 0; i < scales.size(); ++i) {
+    const double s = scales[i];
     const auto g0 = gaussian_kernel(s, 0), g1 = gaussian_kernel(s, 1), g2 = gaussian_kernel(s, 2);
-    out.push_back(scale_eigen(convolve_separable(image, g2, g0), convolve_separable(image, g1, g1),
-                              convolve_separable(image, g0, g2), s));
+    scale_eigen(convolve_separable(image, g2, g0), convolve_separable(image, g1, g1),
+                convolve_separable(image, g0, g2), s, out[i]);
   }
-  return out;
 }
 
 /// Fast: the reference's sampled Gaussian-derivative kernels, applied in float by the
 /// vectorising passes above (three row passes shared by the three second derivatives).
-inline std::vector<ScaleEigen> eigen_fast(const Image<float>& image,
-                                          const std::vector<double>& scales) {
-  std::vector<ScaleEigen> out;
-  std::array<Image<float>, 3> along_x;  // the image convolved along x with G, G', G''
-  Image<float> xx, xy, yy;
-  for (double s : scales) {
+inline void eigen_fast(const Image<float>& image, const std::vector<double>& scales,
+                       DerivativeBuffers& d, std::vector<ScaleEigen>& out) {
+  out.resize(scales.size());
+  for (std::size_t i = 0; i < scales.size(); ++i) {
     std::array<std::vector<float>, 3> g;
     for (int order = 0; order < 3; ++order) {
-      const std::vector<double> k = gaussian_kernel(s, order);
+      const std::vector<double> k = gaussian_kernel(scales[i], order);
       g[static_cast<std::size_t>(order)].assign(k.begin(), k.end());
     }
-    for (std::size_t order = 0; order < 3; ++order) convolve_rows(image, g[order], along_x[order]);
-    convolve_cols(along_x[2], g[0], xx);
-    convolve_cols(along_x[1], g[1], xy);
-    convolve_cols(along_x[0], g[2], yy);
-    out.push_back(scale_eigen(xx, xy, yy, s));
+    for (std::size_t order = 0; order < 3; ++order)
+      convolve_rows(image, g[order], d.along_x[order]);
+    convolve_cols(d.along_x[2], g[0], d.xx);
+    convolve_cols(d.along_x[1], g[1], d.xy);
+    convolve_cols(d.along_x[0], g[2], d.yy);
+    scale_eigen(d.xx, d.xy, d.yy, scales[i], out[i]);
   }
-  return out;
 }
 
 /// The largest structure norm S = |(l1, l2)| over pixels and scales.
@@ -183,10 +187,11 @@ inline double max_structure(const std::vector<ScaleEigen>& eigen) {
   return std::sqrt(static_cast<double>(s2));
 }
 
-/// Frangi's response, the maximum over scales, with Frangi's c given.
-inline Image<float> frangi_max(const std::vector<ScaleEigen>& eigen, int rows, int cols,
-                               double beta, double c) {
-  Image<float> v(rows, cols, 0.0f);
+/// Frangi's response into `v` (rows x cols), the maximum over scales, with Frangi's c given.
+inline void frangi_max(const std::vector<ScaleEigen>& eigen, int rows, int cols, double beta,
+                       double c, Image<float>& v) {
+  v.resize(rows, cols);
+  std::fill(v.storage().begin(), v.storage().end(), 0.0f);
   const float rb_weight = static_cast<float>(1 / (2 * beta * beta));
   const float s_weight = static_cast<float>(1 / (2 * c * c));
   for (const ScaleEigen& e : eigen)
@@ -197,19 +202,18 @@ inline Image<float> frangi_max(const std::vector<ScaleEigen>& eigen, int rows, i
       const float value = std::exp(-rb * rb * rb_weight) * (1 - std::exp(-s2 * s_weight));
       v.data()[i] = std::max(v.data()[i], value);
     }
-  return v;
 }
 
-/// The image averaged over 2x2 blocks (an odd last row or column averages what it has).
-inline Image<float> half_size(const Image<float>& in) {
+/// The image averaged over 2x2 blocks into `out` (an odd last row or column averages what it
+/// has).
+inline void half_size(const Image<float>& in, Image<float>& out) {
   const int rows = (in.rows() + 1) / 2, cols = (in.cols() + 1) / 2;
-  Image<float> out(rows, cols);
+  out.resize(rows, cols);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {
       const int r1 = std::min(2 * r + 1, in.rows() - 1), c1 = std::min(2 * c + 1, in.cols() - 1);
       out(r, c) = 0.25f * (in(2 * r, 2 * c) + in(2 * r, c1) + in(r1, 2 * c) + in(r1, c1));
     }
-  return out;
 }
 
 /// full = max(full, `half` interpolated back): bilinear, pixel centres aligned (full-resolution
@@ -259,8 +263,18 @@ inline void check_vesselness_options(const VesselnessOptions& o) {
 
 }  // namespace detail
 
-/// Vesselness in [0, 1] of dark tubular structures; image intensities in any range.
-inline Image<float> vesselness(const Image<float>& image, const VesselnessOptions& o = {}) {
+/// The working images of vesselness(), for a caller that keeps them between calls: at one
+/// image size they are allocated once (about 10 MB at 512 x 512 px).
+struct VesselnessBuffers {
+  detail::DerivativeBuffers derivatives;
+  std::vector<detail::ScaleEigen> full, half;  // per scale, at full and at half resolution
+  Image<float> halved, half_response;
+};
+
+/// Vesselness in [0, 1] of dark tubular structures into `v` (resized); image intensities in any
+/// range.
+inline void vesselness(const Image<float>& image, const VesselnessOptions& o, Image<float>& v,
+                       VesselnessBuffers& buffers) {
   GIMM_CHECK(!image.empty(), "vesselness: the image is empty");
   detail::check_vesselness_options(o);
   for (float v : image.storage())
@@ -274,24 +288,41 @@ inline Image<float> vesselness(const Image<float>& image, const VesselnessOption
     else
       full_scales.push_back(s);
   }
-  auto eigen = [&](const Image<float>& im, const std::vector<double>& scales) {
-    return o.exact_derivatives ? detail::eigen_exact(im, scales) : detail::eigen_fast(im, scales);
+  auto eigen = [&](const Image<float>& im, const std::vector<double>& scales,
+                   std::vector<detail::ScaleEigen>& out) {
+    if (o.exact_derivatives)
+      detail::eigen_exact(im, scales, out);
+    else
+      detail::eigen_fast(im, scales, buffers.derivatives, out);
   };
-  const std::vector<detail::ScaleEigen> full = eigen(image, full_scales);
-  const Image<float> halved = half_scales.empty() ? Image<float>() : detail::half_size(image);
-  const std::vector<detail::ScaleEigen> half =
-      half_scales.empty() ? std::vector<detail::ScaleEigen>{} : eigen(halved, half_scales);
+  std::vector<detail::ScaleEigen>&full = buffers.full, &half = buffers.half;
+  eigen(image, full_scales, full);
+  if (!half_scales.empty()) detail::half_size(image, buffers.halved);
+  eigen(buffers.halved, half_scales, half);  // no scales: `half` is emptied
   // Frangi's c: half the largest structure norm over the image and all scales.
   const double s_max = std::max(detail::max_structure(full), detail::max_structure(half));
-  if (!(s_max > 0)) return Image<float>(image.rows(), image.cols(), 0.0f);  // no structure
+  if (!(s_max > 0)) {  // no structure
+    v.resize(image.rows(), image.cols());
+    std::fill(v.storage().begin(), v.storage().end(), 0.0f);
+    return;
+  }
   const double c = 0.5 * s_max;
-  Image<float> v = detail::frangi_max(full, image.rows(), image.cols(), o.beta, c);
-  if (!half.empty())
-    detail::max_with_doubled(v, detail::frangi_max(half, halved.rows(), halved.cols(), o.beta, c));
+  detail::frangi_max(full, image.rows(), image.cols(), o.beta, c, v);
+  if (!half.empty()) {
+    const Image<float>& halved = buffers.halved;
+    detail::frangi_max(half, halved.rows(), halved.cols(), o.beta, c, buffers.half_response);
+    detail::max_with_doubled(v, buffers.half_response);
+  }
   // Normalise to the image's strongest response, so thresholds are relative.
   const float top = *std::max_element(v.storage().begin(), v.storage().end());
   if (top > 0)
     for (float& x : v.storage()) x /= top;
+}
+
+inline Image<float> vesselness(const Image<float>& image, const VesselnessOptions& o = {}) {
+  Image<float> v;
+  VesselnessBuffers buffers;
+  vesselness(image, o, v, buffers);
   return v;
 }
 
@@ -307,7 +338,8 @@ inline int background_width_px(double largest_scale_px) {
 /// behind it; the black top-hat of the log over `width` keeps the dark structures narrower than
 /// the window (the vessels) and drops wider ones and steps. The log is taken of the image scaled
 /// to [0, 1], plus 1e-3 (a window's black is not zero intensity, and a floor keeps it finite).
-inline Image<float> vessel_contrast(const Image<float>& image, int width) {
+inline void vessel_contrast(const Image<float>& image, int width, Image<float>& contrast,
+                            Image<float>& log_image, TopHatBuffers& buffers) {
   GIMM_CHECK(!image.empty(), "vessel_contrast: the image is empty");
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
   for (float v : image.storage()) {
@@ -315,22 +347,44 @@ inline Image<float> vessel_contrast(const Image<float>& image, int width) {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   }
-  Image<float> log_image(image.rows(), image.cols(), 0.0f);
-  if (!(hi > lo)) return log_image;  // flat: nothing to find
+  if (!(hi > lo)) {  // flat: nothing to find
+    contrast.resize(image.rows(), image.cols());
+    std::fill(contrast.storage().begin(), contrast.storage().end(), 0.0f);
+    return;
+  }
   const float scale = 1.0f / (hi - lo);
+  log_image.resize(image.rows(), image.cols());
   using Pixels = Eigen::Map<Eigen::ArrayXf>;
   const Eigen::Map<const Eigen::ArrayXf> in(image.data(), static_cast<Eigen::Index>(image.size()));
   Pixels(log_image.data(), in.size()) = ((in - lo) * scale + 1e-3f).log();  // Eigen's packet log
-  Image<float> contrast = black_top_hat(log_image, width);
+  black_top_hat(log_image, width, contrast, buffers);
   for (float& v : contrast.storage()) v = -v;
+}
+
+inline Image<float> vessel_contrast(const Image<float>& image, int width) {
+  Image<float> contrast, log_image;
+  TopHatBuffers buffers;
+  vessel_contrast(image, width, contrast, log_image, buffers);
   return contrast;
 }
+
+/// The working memory of segment_vessels(), for a caller that segments image after image (a
+/// matcher, pair after pair): kept, it is allocated once per image size. On machines where the
+/// first touch of a page is dear (a virtual machine's), allocating it afresh for each 512 x 512
+/// image took as long as the segmentation's arithmetic.
+struct SegmentationBuffers {
+  Image<float> log_image, contrast, response;
+  TopHatBuffers top_hat;
+  VesselnessBuffers vesselness;
+  Image<std::uint8_t> seen;
+  std::vector<int> component, frontier;  // frontier: a stack (the component is the same)
+};
 
 /// A vessel mask (1 = vessel) from an angiogram: background removed (SegmentationOptions::
 /// remove_background), vesselness, hysteresis, small components removed. An image without
 /// vessel-like structure gives an empty mask.
-inline Image<std::uint8_t> segment_vessels(const Image<float>& image,
-                                           const SegmentationOptions& o = {}) {
+inline void segment_vessels(const Image<float>& image, const SegmentationOptions& o,
+                            Image<std::uint8_t>& mask, SegmentationBuffers& buffers) {
   GIMM_CHECK(
       o.low > 0 && o.high >= o.low && o.high <= 1,
       "segment_vessels: need 0 < low <= high <= 1, got low " << o.low << ", high " << o.high);
@@ -339,14 +393,21 @@ inline Image<std::uint8_t> segment_vessels(const Image<float>& image,
   detail::check_vesselness_options(o.vesselness);
   const std::vector<double>& scales = o.vesselness.scales_px;
   const double widest = *std::max_element(scales.begin(), scales.end());
-  const Image<float> v =
-      o.remove_background && !image.empty()
-          ? vesselness(vessel_contrast(image, background_width_px(widest)), o.vesselness)
-          : vesselness(image, o.vesselness);
+  Image<float>& v = buffers.response;
+  if (o.remove_background && !image.empty()) {
+    vessel_contrast(image, background_width_px(widest), buffers.contrast, buffers.log_image,
+                    buffers.top_hat);
+    vesselness(buffers.contrast, o.vesselness, v, buffers.vesselness);
+  } else {
+    vesselness(image, o.vesselness, v, buffers.vesselness);
+  }
   const int rows = v.rows(), cols = v.cols();
-  Image<std::uint8_t> mask(rows, cols, 0);
-  std::vector<int> component, frontier;  // frontier: a stack (the component is the same)
-  Image<std::uint8_t> seen(rows, cols, 0);
+  mask.resize(rows, cols);
+  std::fill(mask.storage().begin(), mask.storage().end(), std::uint8_t{0});
+  Image<std::uint8_t>& seen = buffers.seen;
+  seen.resize(rows, cols);
+  std::fill(seen.storage().begin(), seen.storage().end(), std::uint8_t{0});
+  std::vector<int>&component = buffers.component, &frontier = buffers.frontier;
   for (int start = 0; start < rows * cols; ++start) {
     if (seen.data()[start] || v.data()[start] < o.low) continue;
     // One 8-connected component of V >= low; kept if it holds a seed and is large enough.
@@ -373,6 +434,13 @@ inline Image<std::uint8_t> segment_vessels(const Image<float>& image,
     if (seeded && static_cast<int>(component.size()) >= o.min_area_px)
       for (int p : component) mask.data()[p] = 1;
   }
+}
+
+inline Image<std::uint8_t> segment_vessels(const Image<float>& image,
+                                           const SegmentationOptions& o = {}) {
+  Image<std::uint8_t> mask;
+  SegmentationBuffers buffers;
+  segment_vessels(image, o, mask, buffers);
   return mask;
 }
 
