@@ -297,6 +297,14 @@ TEST_CASE("Kept buffers give what fresh ones give, image after image", "[match][
     }
   }
   CHECK(lit_steps == 5);  // all but the flat image found their bars
+  // An output that is the input would be overwritten while it is read: refused.
+  gimm::Image<float> same = small;
+  CHECK_THROWS_WITH(gimm::vesselness(same, halved.vesselness, same, seg.vesselness),
+                    Catch::Contains("must not be the input"));
+  CHECK_THROWS_WITH(gimm::vessel_contrast(same, 7, same, seg.log_image, seg.top_hat),
+                    Catch::Contains("must not be the input"));
+  CHECK_THROWS_WITH(gimm::black_top_hat(same, 7, same, top_hat),
+                    Catch::Contains("must not be the input"));
 }
 
 TEST_CASE("Geometric matcher: one matcher, pair after pair, gives a fresh matcher's result",

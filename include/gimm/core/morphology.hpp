@@ -67,7 +67,8 @@ void square_extreme(const Image<float>& in, int width, Pick pick, Image<float>& 
                     Image<float>& out) {
   GIMM_CHECK(width >= 1 && width % 2 == 1,
              "morphology: the window width must be odd and >= 1 px, got " << width);
-  GIMM_ASSERT(&in != &out && &in != &along);
+  GIMM_CHECK(&in != &out && &in != &along,
+             "morphology: the output and working images must not be the input");
   const int half = width / 2;
   along.resize(in.rows(), in.cols());
   std::vector<float> behind(static_cast<std::size_t>(width)), ahead(behind.size());
@@ -113,6 +114,8 @@ struct TopHatBuffers {
 /// ones and steps (edges) are not.
 inline void black_top_hat(const Image<float>& in, int width, Image<float>& out,
                           TopHatBuffers& buffers) {
+  GIMM_CHECK(&in != &out && &in != &buffers.along && &in != &buffers.dilated,
+             "black_top_hat: the output and working images must not be the input");
   detail::square_extreme(in, width, detail::PickMax{}, buffers.along, buffers.dilated);
   detail::square_extreme(buffers.dilated, width, detail::PickMin{}, buffers.along, out);
   for (std::size_t i = 0; i < out.size(); ++i) out.data()[i] -= in.data()[i];

@@ -276,9 +276,10 @@ struct VesselnessBuffers {
 inline void vesselness(const Image<float>& image, const VesselnessOptions& o, Image<float>& v,
                        VesselnessBuffers& buffers) {
   GIMM_CHECK(!image.empty(), "vesselness: the image is empty");
+  GIMM_CHECK(&image != &v, "vesselness: the output image must not be the input");
   detail::check_vesselness_options(o);
-  for (float v : image.storage())
-    GIMM_CHECK(std::isfinite(v), "vesselness: the image has a non-finite pixel (" << v << ")");
+  for (float x : image.storage())
+    GIMM_CHECK(std::isfinite(x), "vesselness: the image has a non-finite pixel (" << x << ")");
   std::vector<double> full_scales, half_scales;  // half: in half-resolution pixels
   const bool halve = !o.exact_derivatives && o.half_resolution_from_px > 0 &&
                      std::min(image.rows(), image.cols()) >= 16;
@@ -341,6 +342,8 @@ inline int background_width_px(double largest_scale_px) {
 inline void vessel_contrast(const Image<float>& image, int width, Image<float>& contrast,
                             Image<float>& log_image, TopHatBuffers& buffers) {
   GIMM_CHECK(!image.empty(), "vessel_contrast: the image is empty");
+  GIMM_CHECK(&image != &contrast && &image != &log_image,
+             "vessel_contrast: the output images must not be the input");
   float lo = std::numeric_limits<float>::infinity(), hi = -lo;
   for (float v : image.storage()) {
     GIMM_CHECK(std::isfinite(v), "vessel_contrast: the image has a non-finite pixel (" << v << ")");
