@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "gimm/core/huge_pages.hpp"
 #include "gimm/core/volume.hpp"
 
 namespace gimm {
@@ -53,7 +54,8 @@ inline void edt_1d(const double* f, double* d, int n, double h, std::vector<int>
 template <class T>
 Volume<float> distance_to_background(const Volume<T>& mask) {
   const int n[3] = {mask.nx(), mask.ny(), mask.nz()};
-  std::vector<double> g(mask.size());
+  std::vector<double> g;
+  resize_huge(g, mask.size());
   for (std::size_t i = 0; i < g.size(); ++i)
     g[i] = mask.data()[i] != T(0) ? std::numeric_limits<double>::infinity() : 0.0;
   const std::size_t stride[3] = {1, static_cast<std::size_t>(n[0]),

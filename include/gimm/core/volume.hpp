@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/huge_pages.hpp"
 
 namespace gimm {
 
@@ -111,6 +112,7 @@ class Volume {
   Volume() = default;
   explicit Volume(const VolumeGeometry& geometry, T fill = T{}) : geometry_(geometry) {
     geometry_.validate("Volume");
+    reserve_huge(own_, static_cast<std::size_t>(geometry_.voxel_count()));
     own_.assign(static_cast<std::size_t>(geometry_.voxel_count()), fill);
     data_ = own_.data();
     size_ = own_.size();
@@ -126,8 +128,9 @@ class Volume {
     return v;
   }
 
-  Volume(const Volume& other)
-      : geometry_(other.geometry_), own_(other.data_, other.data_ + other.size_) {
+  Volume(const Volume& other) : geometry_(other.geometry_) {
+    reserve_huge(own_, other.size_);
+    own_.assign(other.data_, other.data_ + other.size_);
     data_ = own_.data();
     size_ = own_.size();
   }

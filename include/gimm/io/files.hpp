@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/huge_pages.hpp"
 
 namespace gimm {
 
@@ -44,7 +45,7 @@ inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& p
   std::vector<unsigned char> bytes;
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
-  if (!ec) bytes.resize(static_cast<std::size_t>(size));
+  if (!ec) resize_huge(bytes, static_cast<std::size_t>(size));
   std::size_t got = bytes.empty() ? 0 : std::fread(bytes.data(), 1, bytes.size(), f);
   // Files whose size is not known up front (pipes, /proc) or that grew: read on in chunks.
   unsigned char chunk[1 << 16];

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/huge_pages.hpp"
 
 namespace gimm {
 
@@ -33,9 +34,10 @@ inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std
   z_stream z{};
   GIMM_CHECK_AS(FormatError, inflateInit2(&z, window_bits) == Z_OK,
                 "'" << what << "': cannot initialise zlib");
-  std::vector<unsigned char> out(
-      std::min<std::uint64_t>(std::max<std::uint64_t>(std::uint64_t(size) * 4, 1 << 16),
-                              std::max<std::uint64_t>(max_bytes, 1)));
+  std::vector<unsigned char> out;
+  resize_huge(out,
+              std::min<std::uint64_t>(std::max<std::uint64_t>(std::uint64_t(size) * 4, 1 << 16),
+                                      std::max<std::uint64_t>(max_bytes, 1)));
   z.next_in = const_cast<unsigned char*>(data);
   z.avail_in = static_cast<uInt>(size);
   std::size_t produced = 0;
@@ -48,7 +50,7 @@ inline std::vector<unsigned char> inflate_streams(const unsigned char* data, std
                       "'" << what << "': " << format << " data inflates to more than " << max_bytes
                           << " bytes" << limit_reason);
       }
-      out.resize(std::min<std::uint64_t>(out.size() * 2, max_bytes));
+      resize_huge(out, std::min<std::uint64_t>(out.size() * 2, max_bytes));
     }
     const std::size_t room = std::min<std::size_t>(out.size() - produced, 1u << 30);
     z.next_out = out.data() + produced;
@@ -126,7 +128,8 @@ inline std::vector<unsigned char> gzip_compress(const void* data, std::size_t si
   z_stream z{};
   GIMM_CHECK(deflateInit2(&z, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) == Z_OK,
              "gzip_compress: cannot initialise zlib");
-  std::vector<unsigned char> out(deflateBound(&z, static_cast<uLong>(size)) + 64);
+  std::vector<unsigned char> out;
+  resize_huge(out, deflateBound(&z, static_cast<uLong>(size)) + 64);
   z.next_in = static_cast<Bytef*>(const_cast<void*>(data));
   z.avail_in = static_cast<uInt>(size);
   z.next_out = out.data();

@@ -395,7 +395,8 @@ void write_nifti(const std::filesystem::path& path, const Volume<T>& volume,
              "write_nifti: '" << path.string() << "': NIfTI-1 dims are int16, got " << g.dims[0]
                               << "x" << g.dims[1] << "x" << g.dims[2]);
   constexpr std::size_t offset = 352;
-  std::vector<unsigned char> bytes(offset + volume.size() * sizeof(T), 0);
+  std::vector<unsigned char> bytes;
+  resize_huge(bytes, offset + volume.size() * sizeof(T));
   using detail::put;
   put<std::int32_t>(bytes, 0, 348);
   bytes[39] = 0;  // dim_info
