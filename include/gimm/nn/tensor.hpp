@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "gimm/core/error.hpp"
+#include "gimm/core/huge_pages.hpp"
 
 namespace gimm::nn {
 
@@ -47,8 +48,10 @@ class Tensor {
  public:
   Tensor() = default;
   /// Zero-filled tensor of the given shape.
-  explicit Tensor(Shape shape, float fill = 0.0f)
-      : shape_(std::move(shape)), data_(static_cast<std::size_t>(shape_numel(shape_)), fill) {
+  explicit Tensor(Shape shape, float fill = 0.0f) : shape_(std::move(shape)) {
+    const auto n = static_cast<std::size_t>(shape_numel(shape_));
+    reserve_huge(data_, n);  // a large activation: huge pages before its first touch
+    data_.assign(n, fill);
     update_strides();
   }
   Tensor(std::initializer_list<std::int64_t> shape) : Tensor(Shape(shape)) {}
