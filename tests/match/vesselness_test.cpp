@@ -314,11 +314,15 @@ TEST_CASE("Geometric matcher: one matcher, pair after pair, gives a fresh matche
   const auto p128 = curves_pair(128), p96 = curves_pair(96);
   const gimm::GeometricMatcher kept;
   const gimm::GeometricMatcher copy = kept;
+  // A pool outliving the matchers made on it, one per pair (as the Python binding does).
+  const auto pool = std::make_shared<gimm::ViewBufferPool>();
   for (const CurvesPair* p : {p128.get(), p96.get(), p128.get(), p96.get()}) {
     INFO(p->pair.id);
     const auto fresh = gimm::GeometricMatcher().match_with_points(p->pair);
     REQUIRE(fresh.size() >= 5);
     check_same_matches(kept.match_with_points(p->pair), fresh);
     check_same_matches(copy.match_with_points(p->pair), fresh);
+    check_same_matches(gimm::GeometricMatcher({}, pool).match_with_points(p->pair), fresh);
   }
+  CHECK_THROWS_WITH(gimm::GeometricMatcher({}, nullptr), Catch::Contains("no buffer pool"));
 }

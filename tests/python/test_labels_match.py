@@ -248,6 +248,27 @@ class Matching(unittest.TestCase):
     def test_geometric_exact_vesselness_same_matches_as_gimm_match(self):
         self.geometric_same_as_gimm_match("--exact-vesselness")
 
+    def test_geometric_repeated_calls_agree(self):
+        # The module keeps the matcher's working memory between calls: a pair matched again
+        # after pairs of another size and mode gives what it gave the first time.
+        big = [carm(*VIEW_A, size=256), carm(*VIEW_B_NEAR, size=256)]  # segmented: 8 matches
+        small = [carm(*VIEW_A), carm(*VIEW_B)]
+        render = renderer()
+        rendered = {id(c): render.render(c) for c in big + small}
+
+        def match(cameras, masks=False):
+            r = [rendered[id(c)] for c in cameras]
+            extra = dict(mask_a=r[0]["vessel_mask"], mask_b=r[1]["vessel_mask"]) if masks else {}
+            return gimm.match_geometric(r[0]["intensity"], r[1]["intensity"], *cameras, **extra)
+
+        first = [match(big), match(small, masks=True)]
+        self.assertGreaterEqual(len(first[0]["confidence"]), 5)
+        self.assertGreater(len(first[1]["confidence"]), 10)
+        again = [match(small, masks=True), match(big)]
+        for was, now in zip(first, reversed(again)):
+            for key in ("points_a", "points_b", "confidence", "margin", "world_mm"):
+                np.testing.assert_array_equal(was[key], now[key], err_msg=key)
+
     def test_geometric_masks_and_bad_input(self):
         a, b = carm(*VIEW_A), carm(*VIEW_B)
         rendered = [renderer().render(camera) for camera in (a, b)]

@@ -692,6 +692,12 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
 class GeometricMatcher : public PairMatcher {
  public:
   explicit GeometricMatcher(GeometricOptions options = {}) : options_(options) {}
+  /// With working memory shared beyond this matcher's life (a binding that makes a matcher
+  /// per call keeps one pool for all of them).
+  GeometricMatcher(GeometricOptions options, std::shared_ptr<ViewBufferPool> buffers)
+      : options_(options), buffers_(std::move(buffers)) {
+    GIMM_CHECK(buffers_ != nullptr, "geometric matcher: no buffer pool given (null)");
+  }
   std::string name() const override { return "geometric"; }
   // With masks it reads only them; segmenting, it reads the images.
   bool needs_images() const override { return !options_.use_masks; }
