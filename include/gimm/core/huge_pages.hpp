@@ -4,9 +4,9 @@
 /// A fresh buffer costs a page fault per 4 KB page at its first touch. On a virtual machine a
 /// fault costs microseconds, so a CT-size volume (256 MB as float: 65536 pages) took about a
 /// second to touch before any work was done on it. Linux backs a region with 2 MB pages where
-/// the program asks for it (madvise(MADV_HUGEPAGE); transparent_hugepage "madvise", Debian's and
-/// Ubuntu's default) or everywhere ("always"): 512 times fewer faults. The advice is given
-/// before the first touch, on the 2 MB-aligned part of the buffer; it is only advice, so a
+/// the program asks for it (madvise(MADV_HUGEPAGE); transparent_hugepage "madvise", as on the
+/// machines this was measured on) or everywhere ("always"): 512 times fewer faults. The advice is
+/// given before the first touch, on the 2 MB-aligned part of the buffer; it is only advice, so a
 /// kernel without huge pages, or another system, leaves the buffer as it was.
 #include <cstddef>
 #include <cstdint>
