@@ -1,5 +1,6 @@
 // Image<T>: row-major storage indexed (row, col); pixel (row i, col j) is data()[i * cols + j].
 #include <catch2/catch.hpp>
+#include <vector>
 
 #include "gimm/core/image.hpp"
 
@@ -79,4 +80,11 @@ TEST_CASE("Image::resize keeps the storage it has room in", "[core][image]") {
   CHECK(im.empty());
   CHECK_THROWS_WITH(im.resize(2, -3), Catch::Matchers::Contains("2 x -3"));
   CHECK(im.size() == 0u);  // a refused resize leaves the image as it was
+  im.assign(5, 4, 9);      // assign: the same storage, every pixel the fill
+  CHECK(im.data() == storage);
+  CHECK(im.rows() == 5);
+  CHECK(im.cols() == 4);
+  CHECK(im.storage() == std::vector<int>(20, 9));
+  CHECK_THROWS_WITH(im.assign(-1, 2, 0), Catch::Matchers::Contains("-1 x 2"));
+  CHECK(im.rows() == 5);
 }

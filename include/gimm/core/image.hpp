@@ -15,19 +15,22 @@ class Image {
  public:
   Image() = default;
   /// An image of `rows` x `cols` pixels, all equal to `fill`.
-  Image(int rows, int cols, T fill = T{}) : rows_(rows), cols_(cols) {
-    GIMM_CHECK(rows >= 0 && cols >= 0,
-               "Image: rows and cols must be non-negative, got " << rows << " x " << cols);
-    data_.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols), fill);
-  }
+  Image(int rows, int cols, T fill = T{}) { assign(rows, cols, fill); }
 
   /// Make this a rows x cols image in the storage it has when that is large enough, so a buffer
   /// kept between calls is not allocated (and its pages touched for the first time) again. The
   /// pixels' values are unspecified: the caller overwrites every one.
   void resize(int rows, int cols) {
-    GIMM_CHECK(rows >= 0 && cols >= 0,
-               "Image: rows and cols must be non-negative, got " << rows << " x " << cols);
+    check_size(rows, cols);
     data_.resize(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols));
+    rows_ = rows;
+    cols_ = cols;
+  }
+  /// Make this a rows x cols image with every pixel `fill`, in the storage it has when that is
+  /// large enough (as resize()).
+  void assign(int rows, int cols, T fill) {
+    check_size(rows, cols);
+    data_.assign(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols), fill);
     rows_ = rows;
     cols_ = cols;
   }
@@ -62,6 +65,10 @@ class Image {
   const std::vector<T>& storage() const { return data_; }
 
  private:
+  static void check_size(int rows, int cols) {
+    GIMM_CHECK(rows >= 0 && cols >= 0,
+               "Image: rows and cols must be non-negative, got " << rows << " x " << cols);
+  }
   std::size_t index(int row, int col) const {
     return static_cast<std::size_t>(row) * static_cast<std::size_t>(cols_) +
            static_cast<std::size_t>(col);

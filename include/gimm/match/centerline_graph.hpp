@@ -204,10 +204,8 @@ CenterlineGraph2d centerline_graph(const Image<T>& mask, int min_branch_px,
   g.cols = mask.cols();
   const int rows = skel.rows(), cols = skel.cols();
   Image<std::uint8_t>&node = buffers.node, &used = buffers.used;
-  for (Image<std::uint8_t>* im : {&node, &used}) {
-    im->resize(rows, cols);
-    std::fill(im->storage().begin(), im->storage().end(), std::uint8_t{0});
-  }
+  node.assign(rows, cols, 0);
+  used.assign(rows, cols, 0);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
       if (skel(r, c)) {

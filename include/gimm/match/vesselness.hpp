@@ -190,8 +190,7 @@ inline double max_structure(const std::vector<ScaleEigen>& eigen) {
 /// Frangi's response into `v` (rows x cols), the maximum over scales, with Frangi's c given.
 inline void frangi_max(const std::vector<ScaleEigen>& eigen, int rows, int cols, double beta,
                        double c, Image<float>& v) {
-  v.resize(rows, cols);
-  std::fill(v.storage().begin(), v.storage().end(), 0.0f);
+  v.assign(rows, cols, 0.0f);
   const float rb_weight = static_cast<float>(1 / (2 * beta * beta));
   const float s_weight = static_cast<float>(1 / (2 * c * c));
   for (const ScaleEigen& e : eigen)
@@ -303,8 +302,7 @@ inline void vesselness(const Image<float>& image, const VesselnessOptions& o, Im
   // Frangi's c: half the largest structure norm over the image and all scales.
   const double s_max = std::max(detail::max_structure(full), detail::max_structure(half));
   if (!(s_max > 0)) {  // no structure
-    v.resize(image.rows(), image.cols());
-    std::fill(v.storage().begin(), v.storage().end(), 0.0f);
+    v.assign(image.rows(), image.cols(), 0.0f);
     return;
   }
   const double c = 0.5 * s_max;
@@ -351,8 +349,7 @@ inline void vessel_contrast(const Image<float>& image, int width, Image<float>& 
     hi = std::max(hi, v);
   }
   if (!(hi > lo)) {  // flat: nothing to find
-    contrast.resize(image.rows(), image.cols());
-    std::fill(contrast.storage().begin(), contrast.storage().end(), 0.0f);
+    contrast.assign(image.rows(), image.cols(), 0.0f);
     return;
   }
   const float scale = 1.0f / (hi - lo);
@@ -405,11 +402,9 @@ inline void segment_vessels(const Image<float>& image, const SegmentationOptions
     vesselness(image, o.vesselness, v, buffers.vesselness);
   }
   const int rows = v.rows(), cols = v.cols();
-  mask.resize(rows, cols);
-  std::fill(mask.storage().begin(), mask.storage().end(), std::uint8_t{0});
+  mask.assign(rows, cols, 0);
   Image<std::uint8_t>& seen = buffers.seen;
-  seen.resize(rows, cols);
-  std::fill(seen.storage().begin(), seen.storage().end(), std::uint8_t{0});
+  seen.assign(rows, cols, 0);
   std::vector<int>&component = buffers.component, &frontier = buffers.frontier;
   for (int start = 0; start < rows * cols; ++start) {
     if (seen.data()[start] || v.data()[start] < o.low) continue;
