@@ -70,7 +70,8 @@ struct CArmFlags {
     app.add_option("--principal-point", principal_point, "principal point U V, px")->expected(2);
     app.add_option("--table", table,
                    "table position LATERAL VERTICAL LONGITUDINAL, mm, relative to the table of "
-                   "the isocentre (moves the isocentre to patient +x, +y, +z; head-first supine)")
+                   "the isocentre (the patient rides on it: the isocentre moves to patient -x, "
+                   "-y, -z; head-first supine)")
         ->expected(3);
   }
 

@@ -245,10 +245,10 @@ Vector fields read as numpy arrays and accept any sequence of numbers.)doc")
           "(3,) the source, world mm")
       .def(
           "table_shift", [](const CArm& c) { return to_numpy(c.table_shift()); },
-          "(3,) the isocentre's move in patient mm caused by the table's move")
+          "(3,) the patient's move in patient mm caused by the table's move (it rides on the table)")
       .def(
           "view_isocenter", [](const CArm& c) { return to_numpy(c.view_isocenter()); },
-          "(3,) this view's isocentre, world mm (isocenter + table_shift())")
+          "(3,) this view's isocentre, world mm (isocenter - table_shift())")
       .def("row_pixel_mm", &CArm::row_pixel_mm, "pitch down the rows, mm")
       .def(
           "principal_point_or_centre",

@@ -256,19 +256,31 @@ TEST_CASE("CArm::validate names the bad field and value", "[geometry][carm]") {
   CHECK_NOTHROW(pose(-180, -89.9).camera());
 }
 
-TEST_CASE("CArm table: the change from the reference table moves the isocentre", "[geometry]") {
-  // HFS: lateral -> +x, vertical -> +y, longitudinal -> +z (docs/conventions.md). A table move
-  // is the same camera as a moved isocentre; flip a sign and the pairs differ.
-  CArm moved = pose(-30, 20);
-  moved.reference_table_mm = {10, 20, 30};
-  moved.table_mm = {11, 18, 35};  // +1 lateral, -2 vertical, +5 longitudinal
-  CArm shifted = pose(-30, 20);
-  shifted.isocenter = {1, -2, 5};
-  CHECK((moved.view_isocenter() - shifted.isocenter).norm() == 0);
-  CHECK((moved.camera().P() - shifted.camera().P()).cwiseAbs().maxCoeff() < 1e-9);
-  // Feet first: lateral and longitudinal turn round.
-  moved.patient_position = PatientPosition::FFS;
-  CHECK(moved.table_shift() == Eigen::Vector3d(-1, -2, -5));
+TEST_CASE("CArm table: the patient rides on the table, the isocentre moves the other way",
+          "[geometry]") {
+  // HFS axes: lateral -> x, vertical -> y, longitudinal -> z (docs/conventions.md). The table
+  // moved by (+1 lateral, -2 vertical, +5 longitudinal) carries the patient with it, so the
+  // patient point now at the room's isocentre is the one that sat at -(1, -2, 5) = (-1, 2, -5):
+  // by hand, that point projects to the image centre (the principal point) in any view, and the
+  // old isocentre does not. Flip the sign or an axis and this fails.
+  for (const auto& [primary, secondary] : {std::pair{0.0, 0.0}, {-30.0, 20.0}, {45.0, -25.0}}) {
+    CArm moved = pose(primary, secondary);
+    moved.reference_table_mm = {10, 20, 30};
+    moved.table_mm = {11, 18, 35};
+    const Camerad camera = moved.camera();
+    const Eigen::Vector2d centre((moved.cols - 1) / 2.0, (moved.rows - 1) / 2.0);
+    CHECK((camera.project(Eigen::Vector3d(-1, 2, -5)).uv - centre).norm() < 1e-9);
+    CHECK((camera.project(Eigen::Vector3d(0, 0, 0)).uv - centre).norm() > 1.0);
+    // ... and the point at the isocentre keeps its depth: the source is SOD from it.
+    CHECK((moved.source_position() - Eigen::Vector3d(-1, 2, -5)).norm() == Approx(moved.sod_mm));
+  }
+  // Feet first: lateral and longitudinal turn round (the patient's left is the table's right),
+  // vertical does not.
+  CArm ffs = pose(0, 0);
+  ffs.patient_position = PatientPosition::FFS;
+  ffs.table_mm = {1, -2, 5};
+  CHECK(ffs.table_shift() == Eigen::Vector3d(-1, -2, -5));
+  CHECK(ffs.view_isocenter() == Eigen::Vector3d(1, 2, 5));
   // The same table as the reference: no move, whatever the absolute position.
   CArm same = pose(10, 0);
   same.table_mm = same.reference_table_mm = {100, -50, 900};

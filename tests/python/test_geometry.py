@@ -59,7 +59,7 @@ class CArmConventions(unittest.TestCase):
 
     def test_table_non_square_pixels_principal_point_and_orthographic(self):
         carm = gimm.CArm(isocenter=[1, 2, 3], table_mm=[10, 20, 30])
-        np.testing.assert_allclose(carm.view_isocenter(), [11, 22, 33])
+        np.testing.assert_allclose(carm.view_isocenter(), [-9, -18, -27])  # the patient rode +table
         carm.patient_position = "FFS"
         np.testing.assert_allclose(carm.table_shift(), [-10, 20, -30])
         self.assertEqual(carm.patient_position, "FFS")
