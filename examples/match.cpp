@@ -13,13 +13,17 @@
 //              --image-b B.png [--tree tree.json] [--tree-vtk tree.vtk] [--tolerance PX]
 //   gimm-match --dataset DIR --method geometric [--segment] --out PRED_DIR
 //   gimm-match --dicom-a A.dcm --dicom-b B.dcm [--frame-a N --frame-b M] [--method geometric]
-//              [--out m.json] [--picture p.png] [--tree t.json] [--tree-vtk t.vtk]
+//              [--system LCA|RCA] [--pixel-a/-b MM] [--table-a/-b L V G] [--isocenter-a/-b X Y Z]
+//              [--camera-a/-b C.json] [--out m.json] [--picture p.png] [--tree t.json]
+//              [--tree-vtk t.vtk]
 // Single pair, either method: --tree/--tree-vtk write the matches triangulated with both cameras
 // (match/reconstruct.hpp; the learned matcher's dropped past --max-reprojection).
 // The matchers themselves are in examples/match/ (methods.hpp), one file each.
-// DICOM (io/dicom.hpp, docs/dicom.md): images and cameras from the files' tags, B's table
-// relative to A's; view classes from the angles unless --class-a/b; real C-arm geometry is off
-// by a few px, so the gate (--delta) and the geometric tolerance default to 5 px there.
+// DICOM (pipeline/dicom_pair.hpp, docs/dicom.md): images, cameras and exposed fields from the
+// files' tags, B's table relative to A's, each view's geometry correctable on its own; the
+// learned matcher's view classes from the angles and --system (or --class-a/b); real C-arm
+// geometry is off by a few px, so the gate (--delta) and the geometric tolerance default to 5 px.
+// Every single-pair mode matches inside the exposed fields (shutters, or found in the images).
 // Dataset mode, any method using cameras: --camera-error-deg D --camera-error-mm M give the
 // matcher cameras off by D degrees and M mm (geometry/camera_error.hpp), for stability sweeps;
 // --noise-photons N --blur-px S degrade the images the matcher sees (render/image_degradation.hpp).
@@ -45,14 +49,15 @@
 #include "cli_common.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/io/camera_json.hpp"
-#include "gimm/io/dicom.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/labels/views.hpp"
 #include "gimm/match/baselines.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/learned_options.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/pipeline/dicom_pair.hpp"
 #include "gimm/render/image_degradation.hpp"
 #include "match/methods.hpp"
 
@@ -249,9 +254,26 @@ int main(int argc, char** argv) {
                  "to A's")
       ->check(CLI::ExistingFile);
   app.add_option("--isocenter", isocenter,
-                 "with --dicom-a/b: A's isocentre X Y Z, patient mm (default 0: --tree points "
-                 "relative to it)")
+                 "with --dicom-a/b: A's isocentre X Y Z, patient mm, B's at A's table (default "
+                 "0: --tree points relative to it)")
       ->expected(3);
+  std::vector<double> isocenter_a, isocenter_b, table_a, table_b;
+  double pixel_a = 0, pixel_b = 0;
+  app.add_option("--isocenter-a", isocenter_a, "with --dicom-a/b: A's isocentre X Y Z only")
+      ->expected(3);
+  app.add_option("--isocenter-b", isocenter_b,
+                 "with --dicom-a/b: B's isocentre X Y Z at its own table (default: A's)")
+      ->expected(3);
+  app.add_option("--table-a", table_a,
+                 "with --dicom-a/b: A's table LATERAL VERTICAL LONGITUDINAL, mm, replacing the "
+                 "file's")
+      ->expected(3);
+  app.add_option("--table-b", table_b, "with --dicom-a/b: B's table, as --table-a")->expected(3);
+  app.add_option("--pixel-a", pixel_a,
+                 "with --dicom-a/b: A's detector pixel pitch, mm, replacing the file's")
+      ->check(gimm::cli::Finite);
+  app.add_option("--pixel-b", pixel_b, "with --dicom-a/b: B's pitch, as --pixel-a")
+      ->check(gimm::cli::Finite);
   app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)");
   app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)");
   app.add_option("--system", system_name,
@@ -262,7 +284,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
       ->capture_default_str();
-  app.add_option("--camera-a", camera_a, "camera of A (JSON): gate with the exact F")
+  app.add_option("--camera-a", camera_a,
+                 "camera of A (JSON): gate with the exact F; with --dicom-a/b it replaces the "
+                 "geometry read from A's file")
       ->check(CLI::ExistingFile);
   app.add_option("--camera-b", camera_b, "camera of B (JSON)")->check(CLI::ExistingFile);
   app.add_option("--gate", gate,
@@ -325,7 +349,8 @@ int main(int argc, char** argv) {
                                                                 {"--input-size", "learned"},
                                                                 {"--max-reprojection", "learned"},
                                                                 {"--class-a", "learned"},
-                                                                {"--class-b", "learned"}};
+                                                                {"--class-b", "learned"},
+                                                                {"--system", "learned"}};
     for (const auto& [flag, owner] : method_flags)
       GIMM_CHECK(app.count(flag) == 0 || method == owner,
                  flag << " is for --method " << owner << ", not " << method);
@@ -386,39 +411,46 @@ int main(int argc, char** argv) {
     gimm_match::LoadedPair loaded_pair;
     if (!dicom_a.empty() || !dicom_b.empty()) {
       GIMM_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
-      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty(),
-                 "--dicom-a/b carry the images and the geometry: no --image-a/b or --camera-a/b");
-      const auto read = [](const std::string& path, int frame) {
-        gimm::DicomReadOptions options;
-        if (frame >= 0) options.frame = frame;
-        gimm::XaFrame f = gimm::read_xa_dicom(path, options);
-        for (const auto& w : f.warnings) std::cerr << "gimm-match: warning: " << w << "\n";
-        return f;
+      GIMM_CHECK(image_a.empty() && image_b.empty(),
+                 "--dicom-a/b carry the images: no --image-a/b");
+      GIMM_CHECK(isocenter.empty() || (isocenter_a.empty() && isocenter_b.empty()),
+                 "--isocenter sets both views' isocentre: give it or --isocenter-a/-b, not both");
+      gimm::DicomPairOptions o;
+      const auto vec3 = [](const std::vector<double>& v) -> std::optional<Eigen::Vector3d> {
+        if (v.empty()) return std::nullopt;
+        return Eigen::Vector3d(v[0], v[1], v[2]);
       };
-      gimm::XaFrame fa = read(dicom_a, frame_a), fb = read(dicom_b, frame_b);
-      gimm::set_table_reference(fb, fa);
-      if (!isocenter.empty())
-        fa.carm.isocenter = fb.carm.isocenter = {isocenter[0], isocenter[1], isocenter[2]};
-      std::optional<gimm::CoronarySystem> system;
-      if (!system_name.empty()) system = gimm::parse_coronary_system(system_name);
-      for (auto* f : {&fa, &fb}) {
-        const bool is_a = f == &fa;
-        int& cls = is_a ? class_a : class_b;
-        std::cout << "gimm-match: view " << (is_a ? "A" : "B") << ": " << f->path << " frame "
-                  << f->frame << "/" << f->frames << ", " << f->carm.cols << "x" << f->carm.rows
-                  << ", primary " << f->carm.primary_deg << ", secondary " << f->carm.secondary_deg
-                  << " deg, table " << f->table_source;
-        if (app.count(is_a ? "--class-a" : "--class-b") == 0) {
-          const gimm::ViewClassMatch m =
-              gimm::view_class_from_angles(system, f->carm.primary_deg, f->carm.secondary_deg);
-          cls = m.id;
-          std::cout << "; class " << m.id << " (" << gimm::to_string(gimm::view_class(m.id).system)
-                    << " " << gimm::view_class(m.id).name << ", " << m.distance_deg
-                    << " deg from its ranges)";
+      for (auto [s, frame, pixel, table, iso, camera, flag_pixel] :
+           {std::tuple{&o.a, frame_a, pixel_a, &table_a, &isocenter_a, &camera_a, "--pixel-a"},
+            {&o.b, frame_b, pixel_b, &table_b, &isocenter_b, &camera_b, "--pixel-b"}}) {
+        if (frame >= 0) s->frame = frame;
+        if (app.count(flag_pixel)) s->pitch_mm = pixel;
+        s->table_mm = vec3(*table);
+        s->isocenter = vec3(isocenter.empty() ? *iso : isocenter);
+        s->camera = read_camera(*camera);
+      }
+      if (!system_name.empty()) o.system = gimm::parse_coronary_system(system_name);
+      const bool classes_given = app.count("--class-a") && app.count("--class-b");
+      o.need_classes = method == "learned" && !classes_given;
+      o.need_system = o.need_classes;
+      const gimm::DicomPair dp = gimm::load_dicom_pair(dicom_a, dicom_b, o);
+      for (const auto& w : dp.warnings) std::cerr << "gimm-match: warning: " << w << "\n";
+      for (const auto* v : {&dp.a, &dp.b}) {
+        const bool is_a = v == &dp.a;
+        const gimm::XaFrame& f = v->frame;
+        std::cout << "gimm-match: view " << (is_a ? "A" : "B") << ": " << f.path << " frame "
+                  << f.frame << "/" << f.frames << ", " << f.carm.cols << "x" << f.carm.rows
+                  << ", primary " << f.carm.primary_deg << ", secondary " << f.carm.secondary_deg
+                  << " deg, table " << f.table_source << "; field " << v->field_source;
+        if (o.need_classes) {
+          (is_a ? class_a : class_b) = v->view_class;
+          std::cout << "; " << v->class_note;
         }
+        for (const auto& c : v->corrections) std::cout << "; " << c;
         std::cout << "\n";
       }
-      loaded_pair = {std::move(fa.image), std::move(fb.image), fa.carm.camera(), fb.carm.camera()};
+      loaded_pair = {dp.a.frame.image, dp.b.frame.image, dp.a.camera,
+                     dp.b.camera,      dp.a.field,       dp.b.field};
       // Real C-arm geometry: true correspondences lie ~2 px (median) and ~4.5 px (90th
       // percentile) off their epipolar lines; 5 px keeps ~93% of them (docs/dicom.md).
       if (app.count("--delta") == 0) options.gate.delta_px = 5.0;
@@ -428,10 +460,14 @@ int main(int argc, char** argv) {
     } else {
       GIMM_CHECK(!image_a.empty() && !image_b.empty(),
                  "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
-      GIMM_CHECK(frame_a < 0 && frame_b < 0 && system_name.empty() && isocenter.empty(),
-                 "--frame-a/b, --system and --isocenter go with --dicom-a/b");
+      for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
+                               "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
+        GIMM_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
       loaded_pair = {gimm::read_png_unit(image_a), gimm::read_png_unit(image_b),
                      read_camera(camera_a), read_camera(camera_b)};
+      // A PNG carries no shutter: the exposed fields are found in the images.
+      loaded_pair.field_a = gimm::exposed_field(loaded_pair.a);
+      loaded_pair.field_b = gimm::exposed_field(loaded_pair.b);
     }
     const gimm_match::PairOutputs outputs{pair, out, picture, tree, tree_vtk, start};
     if (method == "geometric")

@@ -62,6 +62,8 @@ int match_geometric_pair(const LoadedPair& pair, const gimm::GeometricOptions& o
   input.image_b = &b;
   input.camera_a = pair.camera_a;
   input.camera_b = pair.camera_b;
+  input.field_a = pair.field(true);
+  input.field_b = pair.field(false);
   const auto loaded = std::chrono::steady_clock::now();
   const std::vector<gimm::GeometricMatch> found =
       gimm::GeometricMatcher(options).match_with_points(input);

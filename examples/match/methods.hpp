@@ -24,6 +24,12 @@ namespace gimm_match {
 struct LoadedPair {
   gimm::Image<float> a, b;
   std::optional<gimm::Camerad> camera_a, camera_b;
+  /// The exposed fields (match/field_of_view.hpp); empty: the whole image.
+  gimm::Image<std::uint8_t> field_a, field_b;
+  const gimm::Image<std::uint8_t>* field(bool a_side) const {
+    const auto& f = a_side ? field_a : field_b;
+    return f.size() ? &f : nullptr;
+  }
 };
 
 /// Where one pair's results go; an empty path is not written.

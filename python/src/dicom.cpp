@@ -34,6 +34,8 @@ void bind_dicom(py::module_& m) {
         d["frame"] = f.frame;
         d["frames"] = f.frames;
         d["table_source"] = f.table_source;
+        d["field"] = f.field.size() ? py::object(adopt_image(std::move(f.field))) : py::none();
+        d["field_source"] = f.field_source;
         d["tags"] = tags;
         d["warnings"] = f.warnings;
         return d;
@@ -47,7 +49,9 @@ pitch when the file's tags lack or misstate it.
 Returns dict(image (rows, cols) float32 in [0, 1], MONOCHROME2 (vessels dark), in detector
 orientation; carm: a gimm.CArm with the angles, distances, pitch and table position
 (carm.camera() is the view's camera; its isocentre is the world origin unless set); frame,
-frames; table_source; tags: every tag read (tag, name, value, use); warnings; explain: the
+frames; table_source; field: the shutters' exposed field, uint8 (rows, cols), 1 inside, or None
+without shutter tags (gimm.exposed_field finds it in the image); field_source; tags: every tag
+read (tag, name, value, use); warnings; explain: the
 report gimm-carm --explain prints). Malformed files raise gimm.FormatError naming the element.)doc");
   m.def(
       "write_xa_dicom",

@@ -3,20 +3,40 @@
 #include <pybind11/stl.h>
 
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "common.hpp"
 #include "gimm/geometry/epipolar.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/geometric.hpp"
 
 namespace gimm::python {
 
 void bind_geometric(py::module_& m) {
   m.def(
+      "exposed_field",
+      [](const py::handle& image) {
+        Image<float> im = image_from<float>(image, Accept::floating, "image");
+        Image<std::uint8_t> field;
+        {
+          py::gil_scoped_release release;
+          field = exposed_field(im);
+        }
+        return adopt_image(std::move(field));
+      },
+      py::arg("image"), R"doc(
+The exposed field of an angiogram (match/field_of_view.hpp): uint8 (rows, cols), 1 where the
+collimator let X-rays through, 0 on its dark frame and penumbra (and 6 px further in). image:
+float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least 16 x 16.
+)doc");
+  m.def(
       "match_geometric",
       [](const py::handle& image_a, const py::handle& image_b, const py::handle& camera_a,
          const py::handle& camera_b, const py::object& mask_a, const py::object& mask_b,
-         double tolerance_px, bool exact_vesselness, const py::object& min_confidence) {
+         double tolerance_px, bool exact_vesselness, const py::object& min_confidence,
+         const py::object& field_a, const py::object& field_b, bool detect_fields) {
         if (mask_a.is_none() != mask_b.is_none())
           throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
         const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
@@ -35,6 +55,24 @@ void bind_geometric(py::module_& m) {
         input.camera_a = camera_of(camera_a, "camera_a");
         input.camera_b = camera_of(camera_b, "camera_b");
         input.truth = mask_a.is_none() ? nullptr : &masks;
+        // The exposed fields: given, else found in the images (as gimm-match does for a pair).
+        const auto field = [&](const py::object& given, const Image<float>& image,
+                               const char* name) -> std::optional<Image<std::uint8_t>> {
+          if (!given.is_none()) {
+            Image<std::uint8_t> f = image_from<std::uint8_t>(given, Accept::mask, name);
+            if (f.rows() != image.rows() || f.cols() != image.cols())
+              throw py::value_error(std::string("match_geometric: ") + name + " is " +
+                                    std::to_string(f.cols()) + " x " + std::to_string(f.rows()) +
+                                    ", its image " + std::to_string(image.cols()) + " x " +
+                                    std::to_string(image.rows()));
+            return f;
+          }
+          if (detect_fields) return exposed_field(image);
+          return std::nullopt;
+        };
+        const auto fa = field(field_a, a, "field_a"), fb = field(field_b, b, "field_b");
+        input.field_a = fa ? &*fa : nullptr;
+        input.field_b = fb ? &*fb : nullptr;
         GeometricOptions o;
         o.epipolar_tolerance_px = tolerance_px;
         o.segmentation.vesselness.exact_derivatives = exact_vesselness;
@@ -66,7 +104,8 @@ void bind_geometric(py::module_& m) {
       py::arg("image_a"), py::arg("image_b"), py::arg("camera_a"), py::arg("camera_b"),
       py::kw_only(), py::arg("mask_a") = py::none(), py::arg("mask_b") = py::none(),
       py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false,
-      py::arg("min_confidence") = py::none(), R"doc(
+      py::arg("min_confidence") = py::none(), py::arg("field_a") = py::none(),
+      py::arg("field_b") = py::none(), py::arg("detect_fields") = true, R"doc(
 The training-free geometric matcher (docs/geometric-matcher.md), as gimm-match --method geometric
 does for one pair: vessels segmented from the images (or the masks given), 2D centerlines, and a
 dynamic programme along each centerline over the crossings of its epipolar lines, both ways.
@@ -78,6 +117,9 @@ images are segmented. tolerance_px: the epipolar tolerance (calibration error of
 exact_vesselness: the slow reference kernels instead of the fast ones. min_confidence: the
 DP margin a match needs at 4/3 pixels per mm at the isocentre, scaled with the images' pixels
 per mm (default None: 0.5 with masks, 1 segmenting; gimm-match --min-confidence).
+field_a, field_b: the exposed fields (nonzero = exposed, each its image's size); vessels outside
+are not matched. Not given: found in the images when detect_fields (the collimator's dark frame,
+match/field_of_view.hpp; as gimm-match does), else the whole image.
 Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the ranking: the margin
 times how well the match is placed), margin (N,) (the DP margin, what min_confidence
 thresholds), world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras,

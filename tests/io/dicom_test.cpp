@@ -19,6 +19,7 @@
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/io/dicom.hpp"
 #include "gimm/labels/views.hpp"
+#include "gimm/pipeline/dicom_pair.hpp"
 
 namespace fs = std::filesystem;
 
@@ -195,9 +196,9 @@ TEST_CASE("DICOM: a written C-arm reads back as the same camera", "[io][dicom]")
     const fs::path path = tmp(ge ? "roundtrip_ge.dcm" : "roundtrip.dcm");
     gimm::write_xa_dicom(path.string(), image, carm, ge);
     gimm::XaFrame f = gimm::read_xa_dicom(path.string());
-    CHECK(f.table_source == (ge ? "GE private (0019,1021-1023)" : "standard (300A,0128-012A)"));
+    CHECK_THAT(f.table_source, Catch::Contains(ge ? "DLX_SERIE_01" : "standard (300A,0128-012A)"));
     CHECK((f.carm.table_mm - carm.table_mm).norm() == 0);
-    // Against a reference view with the table at zero, the isocentre moved by the table.
+    // Against a reference view with the table at zero, the patient moved with the table.
     f.carm.reference_table_mm.setZero();
     const gimm::Camerad expected = carm.camera(), got = f.carm.camera();
     double worst = 0;
@@ -209,29 +210,68 @@ TEST_CASE("DICOM: a written C-arm reads back as the same camera", "[io][dicom]")
   }
 }
 
-TEST_CASE("DICOM: the table's change moves the isocentre to +x, +y, +z (HFS)", "[io][dicom]") {
-  // The convention verified on a GE system: vertical -> +y, longitudinal -> +z,
-  // lateral -> +x, for the change from the reference view. Flip any sign and this fails.
+/// The pixel a world point lands on, by hand for an AP view (primary 0, secondary 0): the source
+/// is posterior at iso + (0, SOD, 0), the detector anterior; the patient's left (+x) is on the
+/// image's right (+u) and the head (+z) at the top (-v). A point (y - iso.y) mm posterior of the
+/// isocentre is that much nearer the source: magnification SID / (SOD - (y - iso.y)).
+Eigen::Vector2d ap_pixel_by_hand(const Eigen::Vector3d& X, const Eigen::Vector3d& iso, double sid,
+                                 double sod, double pitch, int rows, int cols) {
+  const double m = sid / (sod - (X.y() - iso.y())) / pitch;  // px per mm at the point
+  return {(cols - 1) / 2.0 + m * (X.x() - iso.x()), (rows - 1) / 2.0 - m * (X.z() - iso.z())};
+}
+
+TEST_CASE("DICOM: the table moves the patient, the isocentre goes the other way (HFS, GE)",
+          "[io][dicom]") {
+  // Real GE DL files: (0019,0010) is DLX_SERIE_01, which owns (0019,10xx) and so the table at
+  // (0019,1021) vertical, (0019,1022) longitudinal, (0019,1023) lateral; (0019,0011) is
+  // GEMS_DL_IMG_01, owning (0019,11xx), where (0019,1121-1123) mean something else.
   Spec a, b;
-  a.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "GEMS_ACQU_01"};
+  a.tags[{0x0018, 0x1510}] = {gdcm::VR::DS, "0"};  // AP: the hand projection above
+  a.tags[{0x0018, 0x1511}] = {gdcm::VR::DS, "0"};
+  a.tags[{0x0018, 0x1164}] = {gdcm::VR::DS, "0.25\\0.25"};
+  a.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "DLX_SERIE_01"};
+  a.tags[{0x0019, 0x0011}] = {gdcm::VR::LO, "GEMS_DL_IMG_01"};
   a.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "100"};   // vertical
   a.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "-200"};  // longitudinal
   a.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "5"};     // lateral
+  a.tags[{0x0019, 0x1121}] = {gdcm::VR::DS, "999"};   // GEMS_DL_IMG_01's, not the table
+  a.tags[{0x0019, 0x1122}] = {gdcm::VR::DS, "999"};
+  a.tags[{0x0019, 0x1123}] = {gdcm::VR::DS, "999"};
   b.tags = a.tags;
-  b.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "110"};
-  b.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "-170"};
-  b.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "-2"};
+  b.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "110"};   // +10 vertical
+  b.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "-170"};  // +30 longitudinal
+  b.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "-2"};    // -7 lateral
   write_spec(tmp("table_a.dcm"), a);
   write_spec(tmp("table_b.dcm"), b);
   const gimm::XaFrame fa = gimm::read_xa_dicom(tmp("table_a.dcm").string());
   gimm::XaFrame fb = gimm::read_xa_dicom(tmp("table_b.dcm").string());
   CHECK(fb.carm.table_mm == Eigen::Vector3d(-2, 110, -170));  // lateral, vertical, longitudinal
+  CHECK_THAT(fb.table_source, Catch::Contains("DLX_SERIE_01") && Catch::Contains("(0019,0010)") &&
+                                  Catch::Contains("(0019,1021)"));
+  for (const auto& w : fb.warnings) INFO(w);
+  CHECK(fb.warnings.empty());
   gimm::set_table_reference(fb, fa);
-  CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(-7, 10, 30));
+  // By hand: the table (and the patient on it) moved by (-7 lateral, +10 vertical, +30
+  // longitudinal) = (-7, +10, +30) in patient x, y, z. The patient point now at the room's
+  // isocentre is the one that was at -(-7, 10, 30) = (7, -10, -30).
+  const Eigen::Vector3d now_at_iso(7, -10, -30);
+  const gimm::Camerad cb = fb.carm.camera();
+  const double sid = 1100, sod = 765.5;
+  CHECK((cb.project(now_at_iso).uv - Eigen::Vector2d(3.5, 2.5)).norm() < 1e-9);
+  for (const Eigen::Vector3d& X : {Eigen::Vector3d(20, 5, -40), Eigen::Vector3d(-15, -30, 60)})
+    CHECK((cb.project(X).uv - ap_pixel_by_hand(X, now_at_iso, sid, sod, 0.25, 6, 8)).norm() < 1e-9);
   CHECK(fa.carm.view_isocenter() == Eigen::Vector3d::Zero());
-  // Feet first: lateral and longitudinal turn round, vertical does not.
+  // Feet first: the patient's left is the table's right and the head its foot end, so lateral
+  // and longitudinal turn round, vertical does not: the patient moved (7, 10, -30).
   fb.carm.patient_position = gimm::PatientPosition::FFS;
-  CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(7, 10, -30));
+  CHECK(fb.carm.view_isocenter() == Eigen::Vector3d(-7, -10, 30));
+  // The explain report names the creator, the values and the shift applied.
+  fb.carm.patient_position = gimm::PatientPosition::HFS;
+  const std::string report = gimm::explain(fb);
+  CHECK_THAT(report, Catch::Contains("(0019,0010) PrivateCreator = DLX_SERIE_01") &&
+                         Catch::Contains("(0019,1023) TableLateralPosition = -2") &&
+                         Catch::Contains("the patient moved (-7, 10, 30)") &&
+                         Catch::Contains("= (7, -10, -30) mm"));
 
   // Implicit VR, as GE writes them: the private tags come back without a VR (UN), their bytes
   // the decimal strings.
@@ -239,18 +279,49 @@ TEST_CASE("DICOM: the table's change moves the isocentre to +x, +y, +z (HFS)", "
   implicit.syntax = gdcm::TransferSyntax::ImplicitVRLittleEndian;
   write_spec(tmp("table_implicit.dcm"), implicit);
   const gimm::XaFrame fi = gimm::read_xa_dicom(tmp("table_implicit.dcm").string());
-  CHECK(fi.table_source == "GE private (0019,1021-1023)");
+  CHECK_THAT(fi.table_source, Catch::Contains("DLX_SERIE_01"));
   CHECK(fi.carm.table_mm == Eigen::Vector3d(-2, 110, -170));
 
-  // Without GE's private creator the (0019,10xx) values mean something else: not read.
+  // The creator's block, not its place: DLX_SERIE_01 at (0019,0012) owns (0019,12xx).
+  Spec moved = a;
+  for (std::uint16_t e : {0x0010, 0x0011, 0x1021, 0x1022, 0x1023, 0x1121, 0x1122, 0x1123})
+    moved.tags.erase({0x0019, e});
+  moved.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "GEMS_DL_IMG_01"};
+  moved.tags[{0x0019, 0x0012}] = {gdcm::VR::LO, "DLX_SERIE_01"};
+  moved.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "555"};  // GEMS_DL_IMG_01's: not the table
+  moved.tags[{0x0019, 0x1221}] = {gdcm::VR::DS, "1"};
+  moved.tags[{0x0019, 0x1222}] = {gdcm::VR::DS, "2"};
+  moved.tags[{0x0019, 0x1223}] = {gdcm::VR::DS, "3"};
+  write_spec(tmp("table_block12.dcm"), moved);
+  const gimm::XaFrame fm = gimm::read_xa_dicom(tmp("table_block12.dcm").string());
+  CHECK(fm.carm.table_mm == Eigen::Vector3d(3, 1, 2));
+  CHECK_THAT(fm.table_source, Catch::Contains("(0019,0012)") && Catch::Contains("(0019,1221)"));
+
+  // A creator that only starts like GE's is not GE's table (the standard's rule is the whole
+  // value), and table-like tags under a creator gimm does not know are named in a warning.
   Spec other = a;
-  other.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "SIEMENS MED"};
+  other.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "DLX_SERIE_01X"};
   write_spec(tmp("table_other.dcm"), other);
   const gimm::XaFrame fo = gimm::read_xa_dicom(tmp("table_other.dcm").string());
   CHECK(fo.table_source == "none");
   CHECK(fo.carm.table_mm.isZero());
+  REQUIRE(fo.warnings.size() == 3);
+  CHECK_THAT(fo.warnings[0], Catch::Contains("(0019,1021) = 100") &&
+                                 Catch::Contains("DLX_SERIE_01X") &&
+                                 Catch::Contains("not used for the table"));
 
-  // The standard tags, when GE's are absent.
+  // GE's frame block, GEMS_DL_FRAME_01 (0025,xx1B-1D), when the series block is absent.
+  Spec frame_block;
+  frame_block.tags[{0x0025, 0x0010}] = {gdcm::VR::LO, "GEMS_DL_FRAME_01"};
+  frame_block.tags[{0x0025, 0x101B}] = {gdcm::VR::DS, "4"};
+  frame_block.tags[{0x0025, 0x101C}] = {gdcm::VR::DS, "5"};
+  frame_block.tags[{0x0025, 0x101D}] = {gdcm::VR::DS, "6"};
+  write_spec(tmp("table_frame_block.dcm"), frame_block);
+  const gimm::XaFrame ff = gimm::read_xa_dicom(tmp("table_frame_block.dcm").string());
+  CHECK(ff.carm.table_mm == Eigen::Vector3d(6, 4, 5));
+  CHECK_THAT(ff.table_source, Catch::Contains("GEMS_DL_FRAME_01"));
+
+  // The standard tags, when no vendor block is there.
   Spec standard;
   standard.tags[{0x300A, 0x0128}] = {gdcm::VR::DS, "7"};
   standard.tags[{0x300A, 0x0129}] = {gdcm::VR::DS, "8"};
@@ -259,6 +330,91 @@ TEST_CASE("DICOM: the table's change moves the isocentre to +x, +y, +z (HFS)", "
   const gimm::XaFrame fs_ = gimm::read_xa_dicom(tmp("table_standard.dcm").string());
   CHECK(fs_.table_source == "standard (300A,0128-012A)");
   CHECK(fs_.carm.table_mm == Eigen::Vector3d(9, 7, 8));
+}
+
+TEST_CASE("DICOM: the shutters give the exposed field, turned as the pixels are", "[io][dicom]") {
+  Spec spec;  // 6 rows x 8 columns; DICOM's shutter coordinates are 1-based rows and columns
+  spec.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "RECTANGULAR"};
+  spec.tags[{0x0018, 0x1602}] = {gdcm::VR::IS, "2"};  // left column (1-based): 0-based 1
+  spec.tags[{0x0018, 0x1604}] = {gdcm::VR::IS, "7"};  // right: 0-based 6
+  spec.tags[{0x0018, 0x1606}] = {gdcm::VR::IS, "3"};  // upper row: 0-based 2
+  spec.tags[{0x0018, 0x1608}] = {gdcm::VR::IS, "5"};  // lower: 0-based 4
+  write_spec(tmp("shutter_rect.dcm"), spec);
+  const gimm::XaFrame f = gimm::read_xa_dicom(tmp("shutter_rect.dcm").string());
+  REQUIRE(f.field.rows() == 6);
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 8; ++c)
+      CHECK(int(f.field(r, c)) == int(c >= 1 && c <= 6 && r >= 2 && r <= 4));
+  CHECK_THAT(f.field_source, Catch::Contains("RECTANGULAR"));
+
+  // Circular and rectangular together: the field is inside both.
+  spec.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "RECTANGULAR\\CIRCULAR"};
+  spec.tags[{0x0018, 0x1610}] = {gdcm::VR::IS, "4\\4"};  // centre row 4, column 4 (1-based)
+  spec.tags[{0x0018, 0x1612}] = {gdcm::VR::IS, "1"};
+  write_spec(tmp("shutter_both.dcm"), spec);
+  const gimm::XaFrame both = gimm::read_xa_dicom(tmp("shutter_both.dcm").string());
+  int inside = 0;
+  for (std::size_t k = 0; k < both.field.size(); ++k) inside += both.field.data()[k];
+  CHECK(inside == 5);  // the centre (0-based 3, 3) and its four neighbours
+  CHECK(both.field(3, 3) == 1);
+  CHECK(both.field(2, 3) == 1);
+  CHECK(both.field(2, 2) == 0);
+
+  // Polygonal: a triangle; and the field turns with FieldOfViewRotation as the pixels do.
+  Spec poly;
+  poly.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "POLYGONAL"};
+  poly.tags[{0x0018, 0x1620}] = {gdcm::VR::IS, "1\\1\\1\\8\\6\\1"};  // row\column pairs
+  poly.tags[{0x0018, 0x7032}] = {gdcm::VR::DS, "90"};
+  write_spec(tmp("shutter_poly.dcm"), poly);
+  const gimm::XaFrame p = gimm::read_xa_dicom(tmp("shutter_poly.dcm").string());
+  REQUIRE(p.field.rows() == 8);  // turned: 8 rows x 6 columns
+  REQUIRE(p.field.cols() == 6);
+  // Stored (0, 0) is a corner inside the triangle, stored (5, 7) is outside; a counter-clockwise
+  // quarter turn takes stored (r, c) to (cols - 1 - c, r).
+  CHECK(p.field(7 - 0, 0) == 1);
+  CHECK(p.field(7 - 7, 5) == 0);
+
+  // Missing edges and unknown shapes are refused, naming the tag.
+  Spec bad;
+  bad.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "RECTANGULAR"};
+  write_spec(tmp("shutter_bad.dcm"), bad);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("shutter_bad.dcm").string()),
+                    Catch::Contains("shutter_bad.dcm") && Catch::Contains("(0018,1602)"));
+  bad.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "HEXAGONAL"};
+  write_spec(tmp("shutter_hex.dcm"), bad);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("shutter_hex.dcm").string()),
+                    Catch::Contains("HEXAGONAL"));
+  // No shutter tags: no field from the file.
+  Spec none;
+  write_spec(tmp("shutter_none.dcm"), none);
+  CHECK(gimm::read_xa_dicom(tmp("shutter_none.dcm").string()).field.size() == 0);
+}
+
+TEST_CASE("DICOM: colour and frame counts GDCM mishandles are refused before it reads them",
+          "[io][dicom]") {
+  // PALETTE COLOR aborts the process inside GDCM (an assertion); it must be an error naming the
+  // file and the tag, before GDCM sees the pixels.
+  Spec palette;
+  palette.tags[{0x0028, 0x0004}] = {gdcm::VR::CS, "PALETTE COLOR"};
+  write_spec(tmp("palette.dcm"), palette);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("palette.dcm").string()),
+                    Catch::Contains("palette.dcm") && Catch::Contains("(0028,0004)") &&
+                        Catch::Contains("PALETTE COLOR"));
+  // NumberOfFrames "abc" over 3 frames: GDCM reads 1 frame.
+  Spec frames;
+  frames.frames = 3;
+  frames.tags[{0x0028, 0x0008}] = {gdcm::VR::IS, "abc"};
+  write_spec(tmp("frames_abc.dcm"), frames);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("frames_abc.dcm").string()),
+                    Catch::Contains("frames_abc.dcm") && Catch::Contains("(0028,0008)") &&
+                        Catch::Contains("'abc'"));
+  frames.tags[{0x0028, 0x0008}] = {gdcm::VR::IS, "0"};
+  write_spec(tmp("frames_zero.dcm"), frames);
+  CHECK_THROWS_WITH(gimm::read_xa_dicom(tmp("frames_zero.dcm").string()),
+                    Catch::Contains("(0028,0008)"));
+  frames.tags[{0x0028, 0x0008}] = {gdcm::VR::IS, "3"};
+  write_spec(tmp("frames_three.dcm"), frames);
+  CHECK(gimm::read_xa_dicom(tmp("frames_three.dcm").string()).frames == 3);
 }
 
 TEST_CASE("DICOM: frames, bit depths, MONOCHROME1 and compressed syntaxes", "[io][dicom]") {
@@ -338,6 +494,13 @@ TEST_CASE("DICOM: pixel pitch fallbacks say what they used", "[io][dicom]") {
   CHECK(f.carm.pixel_row_mm == 0);
   REQUIRE(f.warnings.size() == 1);
   CHECK_THAT(f.warnings[0], Catch::Contains("IntensifierSize / Columns"));
+  // FieldOfViewDimensions' pitch is said beside it, not used (docs/dicom.md, "Pixel pitch").
+  spec.tags[{0x0018, 0x1149}] = {gdcm::VR::IS, "200"};
+  write_spec(tmp("intensifier_fov.dcm"), spec);
+  const gimm::XaFrame g = gimm::read_xa_dicom(tmp("intensifier_fov.dcm").string());
+  CHECK(g.carm.pixel_mm == Approx(240.0 / 8));
+  REQUIRE(g.warnings.size() == 1);
+  CHECK_THAT(g.warnings[0], Catch::Contains("FieldOfViewDimensions / Columns would give 25 mm"));
 }
 
 TEST_CASE("DICOM: field-of-view rotation and flip are undone", "[io][dicom]") {
@@ -676,4 +839,76 @@ TEST_CASE("View class from C-arm angles", "[labels][dicom]") {
   m = gimm::view_class_from_angles(std::nullopt, 120, 0);
   CHECK(m.distance_deg > 50);
   CHECK_THROWS_WITH(gimm::view_class_from_angles(std::nullopt, NAN, 0), Catch::Contains("finite"));
+}
+
+TEST_CASE("DICOM pair: per-view corrections, exposed fields and view classes", "[io][dicom]") {
+  Spec a, b;  // A: AP at table 0; B: LAO 50 at a table moved 20 mm laterally
+  a.tags[{0x0018, 0x1510}] = {gdcm::VR::DS, "0"};
+  a.tags[{0x0018, 0x1511}] = {gdcm::VR::DS, "0"};
+  a.tags[{0x0019, 0x0010}] = {gdcm::VR::LO, "DLX_SERIE_01"};
+  a.tags[{0x0019, 0x1021}] = {gdcm::VR::DS, "0"};
+  a.tags[{0x0019, 0x1022}] = {gdcm::VR::DS, "0"};
+  a.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "0"};
+  b.tags = a.tags;
+  b.tags[{0x0018, 0x1510}] = {gdcm::VR::DS, "50"};
+  b.tags[{0x0019, 0x1023}] = {gdcm::VR::DS, "20"};
+  b.tags[{0x0018, 0x1600}] = {gdcm::VR::CS, "RECTANGULAR"};
+  b.tags[{0x0018, 0x1602}] = {gdcm::VR::IS, "2"};
+  b.tags[{0x0018, 0x1604}] = {gdcm::VR::IS, "8"};
+  b.tags[{0x0018, 0x1606}] = {gdcm::VR::IS, "1"};
+  b.tags[{0x0018, 0x1608}] = {gdcm::VR::IS, "6"};
+  write_spec(tmp("pair_a.dcm"), a);
+  write_spec(tmp("pair_b.dcm"), b);
+  const std::string pa = tmp("pair_a.dcm").string(), pb = tmp("pair_b.dcm").string();
+
+  gimm::DicomPairOptions o;
+  o.detect_field = false;  // 6 x 8 px: too small to look for a collimator in
+  o.system = gimm::CoronarySystem::RCA;
+  const gimm::DicomPair plain = gimm::load_dicom_pair(pa, pb, o);
+  // B's table is relative to A's: the patient moved +20 mm to its left, B's isocentre -20 in x.
+  CHECK(plain.b.frame.carm.view_isocenter() == Eigen::Vector3d(-20, 0, 0));
+  CHECK(plain.a.view_class == 1);  // RCA AP Cranial, 15 deg of secondary away: warned of
+  REQUIRE(!plain.warnings.empty());
+  CHECK_THAT(plain.warnings[0], Catch::Contains("view A: the nearest view class, 1, is 15 deg"));
+  CHECK(plain.b.view_class == 2);   // RCA LAO
+  CHECK(plain.b.field(0, 0) == 0);  // the shutter's left edge is column 2 (1-based)
+  CHECK(plain.b.field(3, 4) == 1);
+  CHECK(plain.a.field_source == "whole image (100% of the image)");
+
+  // Correct one view only: B's table and A's pitch.
+  o.b.table_mm = Eigen::Vector3d(5, 0, 0);
+  o.a.pitch_mm = 0.5;
+  const gimm::DicomPair fixed = gimm::load_dicom_pair(pa, pb, o);
+  CHECK(fixed.b.frame.carm.view_isocenter() == Eigen::Vector3d(-5, 0, 0));
+  CHECK(fixed.a.camera.K()(0, 0) == Approx(1100 / 0.5));
+  CHECK(fixed.b.camera.K()(0, 0) == Approx(1100 / 0.2));  // B keeps its file's pitch
+  REQUIRE(fixed.b.corrections.size() == 1);
+  CHECK_THAT(fixed.b.corrections[0], Catch::Contains("replaced by (5 0 0)"));
+  // A whole camera for B, given by hand.
+  gimm::CArm by_hand = fixed.b.frame.carm;
+  by_hand.primary_deg = 52;
+  o.b.camera = by_hand.camera();
+  const gimm::DicomPair given = gimm::load_dicom_pair(pa, pb, o);
+  CHECK((given.b.camera.P() - by_hand.camera().P()).norm() == 0);
+  o.b.camera = gimm::CArm{}.camera();  // 512 x 512: not this frame's
+  CHECK_THROWS_WITH(gimm::load_dicom_pair(pa, pb, o),
+                    Catch::Contains("view B") && Catch::Contains("512 x 512"));
+  o.b.camera.reset();
+
+  // No system: refused where the classes are needed, a reported guess where they are not.
+  o.system.reset();
+  o.need_system = true;
+  CHECK_THROWS_WITH(gimm::load_dicom_pair(pa, pb, o),
+                    Catch::Contains("view A") && Catch::Contains("LCA or RCA"));
+  o.need_system = false;
+  const gimm::DicomPair guessed = gimm::load_dicom_pair(pa, pb, o);
+  CHECK_THAT(guessed.a.class_note, Catch::Contains("system not given"));
+  // A pose far from every class is warned of.
+  b.tags[{0x0018, 0x1510}] = {gdcm::VR::DS, "120"};
+  write_spec(tmp("pair_far.dcm"), b);
+  o.system = gimm::CoronarySystem::LCA;
+  const gimm::DicomPair far = gimm::load_dicom_pair(pa, tmp("pair_far.dcm").string(), o);
+  bool warned = false;
+  for (const auto& w : far.warnings) warned |= w.find("view B: the nearest view class") == 0;
+  CHECK(warned);
 }

@@ -70,6 +70,32 @@ class XaDicom(unittest.TestCase):
         with self.assertRaisesRegex(gimm.Error, "64 x 48"):
             gimm.write_xa_dicom(tmp_path("dicom", "wrong.dcm"), image[:, :10], carm)
 
+    def test_palette_colour_is_an_error_not_an_abort(self):
+        # GDCM asserts on PALETTE COLOR without its tables, which killed the interpreter.
+        path, _, _ = self.written()
+        data = open(path, "rb").read()
+        mono = b"\x28\x00\x04\x00CS\x0c\x00MONOCHROME2 "
+        self.assertIn(mono, data)
+        palette = tmp_path("dicom", "palette.dcm")
+        with open(palette, "wb") as f:
+            f.write(data.replace(mono, b"\x28\x00\x04\x00CS\x0e\x00PALETTE COLOR "))
+        with self.assertRaisesRegex(gimm.FormatError, "palette.dcm.*PALETTE COLOR"):
+            gimm.read_xa_dicom(palette)
+        self.assertIsNone(gimm.read_xa_dicom(path)["field"])  # no shutter tags
+
+    def test_exposed_field(self):
+        # A dark 20 px frame around a bright field: cut, with a margin; no frame: kept whole.
+        image = np.full((128, 128), 0.6, np.float32)
+        framed = image.copy()
+        framed[:20, :] = framed[-20:, :] = framed[:, :20] = framed[:, -20:] = 0.1
+        field = gimm.exposed_field(framed)
+        self.assertEqual(field.dtype, np.uint8)
+        self.assertEqual(field[:20].sum() + field[:, :20].sum(), 0)
+        self.assertEqual(field[40:88, 40:88].min(), 1)
+        self.assertEqual(gimm.exposed_field(image).min(), 1)
+        with self.assertRaisesRegex(gimm.Error, "16 x 16"):
+            gimm.exposed_field(np.zeros((8, 8), np.float32))
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -29,7 +29,9 @@ for seed in $(seq 101 $((100 + patients))); do
       --out "$dir/pair$n-b"
     iso=$(python3 -c "import json; print(*json.load(open('$dir/pair$n-a.camera.json'))['isocenter'])")
     for method in learned geometric; do
-      "$bin/gimm-match" --dicom-a "$dir/pair$n-a.dcm" --dicom-b "$dir/pair$n-b.dcm" --system LCA \
+      system=()  # the learned matcher's view classes need the system; the geometric refuses it
+      [ "$method" = learned ] && system=(--system LCA)
+      "$bin/gimm-match" --dicom-a "$dir/pair$n-a.dcm" --dicom-b "$dir/pair$n-b.dcm" "${system[@]}" \
         --isocenter $iso --method "$method" --out "$dir/pair$n.$method.json" \
         --tree "$dir/pair$n.$method.tree.json" --picture "$dir/pair$n.$method.png" > "$dir/pair$n.$method.log"
     done

@@ -19,11 +19,17 @@
 ///   Pixel pitch at the detector: ImagerPixelSpacing (row\column); without it IntensifierSize /
 ///   Columns, with a warning; without both, an error (or the caller's pitch_mm). The principal
 ///   point is the image centre, unless FieldOfViewOrigin, DetectorActiveDimensions and
-///   DetectorElementSpacing place the detector's centre in the image. Table: GE's private
-///   (0019,1021) vertical, (0019,1022) longitudinal, (0019,1023) lateral when the private creator
-///   (0019,0010) is GE's, else the standard TableTop{Vertical,Longitudinal,Lateral}Position
-///   (300A,0128-012A); their change between two views moves the isocentre (CArm, "table").
-///   PatientPosition HFS or FFS; HFS is assumed, with a warning, only when the tag is absent.
+///   DetectorElementSpacing place the detector's centre in the image.
+/// - Table: a vendor block found by its private creator under PS3.5 7.8.1 (the creator at
+///   (gggg,00xx) owns (gggg,xx00-xxFF)): GE DL's DLX_SERIE_01 (gggg = 0019, xx21 vertical, xx22
+///   longitudinal, xx23 lateral), then GEMS_DL_FRAME_01 (0025, xx1B-xx1D); else the standard
+///   TableTop{Vertical,Longitudinal,Lateral}Position (300A,0128-012A). Table-like private tags
+///   under another creator are named in a warning. The change between two views moves the
+///   patient with the table (CArm, "table"). PatientPosition HFS or FFS; HFS is assumed, with a
+///   warning, only when the tag is absent.
+/// - Exposed field: the collimator shutters (0018,1600-1622; rectangular, circular, polygonal)
+///   as a mask in detector orientation, `field`; without shutter tags the field is found in the
+///   image (match/field_of_view.hpp does that for any image).
 /// - Every tag looked at is in `tags` with its value or "absent", and what was done with it.
 #include <gdcmDataElement.h>
 #include <gdcmDataSet.h>
@@ -78,7 +84,13 @@ struct XaFrame {
   CArm carm;           ///< table_mm read; reference_table_mm = table_mm until set_reference
   int frame = 0;
   int frames = 1;
-  std::string table_source = "none";  ///< "GE private (0019,1021-1023)", "standard (300A,...)"
+  /// Where the table came from: "none", "standard (300A,0128-012A)" or "private <creator>
+  /// (gggg,00xx), ...: vertical (gggg,xx21), ..." naming the private creator and the tags.
+  std::string table_source = "none";
+  /// The collimator shutters' exposed field (1 inside), detector orientation; empty when the
+  /// file has no shutter tags (match/field_of_view.hpp finds it in the image then).
+  Image<std::uint8_t> field;
+  std::string field_source = "none";  ///< "shutter RECTANGULAR\\CIRCULAR (0018,1600)", ...
   std::vector<DicomTagUse> tags;
   std::vector<std::string> warnings;
 };
@@ -202,6 +214,13 @@ inline void check_meta_group_length(DicomBytes& bytes, const DicomElementHeader&
                      << " bytes and needs a data set after it");
 }
 
+/// `s` without leading and trailing blanks (DICOM pads values to an even length).
+inline std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t\r\n") - first + 1);
+}
+
 /// The image pixel module's one-number attributes (PS3.3 C.7.6.3), which GDCM reads as one US
 /// and asserts on when their length is another: samples per pixel, planar configuration,
 /// rows, columns, bits allocated and stored, high bit, pixel representation.
@@ -246,10 +265,29 @@ inline void check_element_value(DicomBytes& bytes, const DicomElementHeader& h,
                        << "' is not an image storage class (X-ray angiography is "
                           "1.2.840.10008.5.1.4.1.1.12.1)");
   }
-  if (h.group == 0x0028 && h.element == 0x0008)  // NumberOfFrames, read by the same GDCM code
+  if (h.group == 0x0028 && h.element == 0x0008) {  // NumberOfFrames, read by the same GDCM code
     GIMM_CHECK_AS(FormatError, (h.vr == "IS" || h.vr == "implicit") && h.length <= 12,
                   path << ": element (0028,0008) NumberOfFrames has VR " << h.vr << " and "
                        << h.length << " bytes; it is one IS (at most 12 bytes)");
+    // GDCM reads "abc" as 1 frame and a run of 3 frames then shows only the first.
+    const std::string frames = trimmed(bytes.value_at(h.value_at, h.length));
+    GIMM_CHECK_AS(FormatError,
+                  !frames.empty() && frames.size() <= 9 &&
+                      std::all_of(frames.begin(), frames.end(),
+                                  [](unsigned char c) { return std::isdigit(c); }) &&
+                      std::stol(frames) >= 1,
+                  path << ": (0028,0008) NumberOfFrames is '" << frames
+                       << "', not a whole number of frames >= 1");
+  }
+  // PhotometricInterpretation: GDCM asserts on a PALETTE COLOR image without its lookup tables,
+  // which aborts the process; an angiogram is grey-scale, so anything else is refused here.
+  if (h.group == 0x0028 && h.element == 0x0004) {
+    const std::string pi =
+        trimmed(bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 64)));
+    GIMM_CHECK_AS(FormatError, pi == "MONOCHROME1" || pi == "MONOCHROME2",
+                  path << ": (0028,0004) PhotometricInterpretation is '" << pi
+                       << "'; an X-ray angiogram is MONOCHROME1 or MONOCHROME2");
+  }
   if (h.group == 0x0008 && h.element == 0x0010) {
     const std::string code = bytes.value_at(h.value_at, std::min<std::uint64_t>(h.length, 8));
     GIMM_CHECK_AS(FormatError, code == "ACR-NEMA",
@@ -418,13 +456,6 @@ inline void check_top_level_elements(const std::string& path) {
                 path);
 }
 
-/// `s` without leading and trailing blanks (DICOM pads values to an even length).
-inline std::string trimmed(const std::string& s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return {};
-  return s.substr(first, s.find_last_not_of(" \t\r\n") - first + 1);
-}
-
 /// The tags of one data set, read as text, each lookup recorded for the explain report.
 class TagReader {
  public:
@@ -433,8 +464,9 @@ class TagReader {
   }
 
   /// The tag's text value (trimmed), or nullopt; recorded with `use` (or "absent: ...").
-  std::optional<std::string> text(std::uint16_t group, std::uint16_t element, const char* name,
-                                  const std::string& use, const std::string& when_absent) {
+  std::optional<std::string> text(std::uint16_t group, std::uint16_t element,
+                                  const std::string& name, const std::string& use,
+                                  const std::string& when_absent) {
     const gdcm::Tag tag(group, element);
     const gdcm::DataSet& ds = file_.GetDataSet();
     std::optional<std::string> value;
@@ -451,7 +483,7 @@ class TagReader {
 
   /// The tag's numbers (DS/IS multi-values separated by '\'); `count` of them when given.
   std::optional<std::vector<double>> numbers(std::uint16_t group, std::uint16_t element,
-                                             const char* name, const std::string& use,
+                                             const std::string& name, const std::string& use,
                                              const std::string& when_absent, int count) {
     const auto value = text(group, element, name, use, when_absent);
     if (!value) return std::nullopt;
@@ -474,13 +506,24 @@ class TagReader {
   }
 
   /// A number that must be present: an error naming the tag otherwise.
-  double required(std::uint16_t group, std::uint16_t element, const char* name,
+  double required(std::uint16_t group, std::uint16_t element, const std::string& name,
                   const std::string& use) {
     const auto v = numbers(group, element, name, use, "absent: required", 1);
     GIMM_CHECK(v, path_ << ": required tag " << tag_string(group, element) << " " << name
                         << " is missing (" << use << ")");
     return v->front();
   }
+
+  /// The text of an element without recording it (private creators, table-like tags).
+  std::optional<std::string> peek(const gdcm::Tag& tag) const {
+    const gdcm::DataSet& ds = file_.GetDataSet();
+    if (!ds.FindDataElement(tag) || ds.GetDataElement(tag).IsEmpty()) return std::nullopt;
+    const std::string s = trimmed(element_text(ds.GetDataElement(tag)));
+    if (s.empty()) return std::nullopt;
+    return s;
+  }
+
+  const gdcm::DataSet& data_set() const { return file_.GetDataSet(); }
 
   std::vector<DicomTagUse> uses;
 
@@ -519,6 +562,216 @@ class TagReader {
   std::string path_;
   gdcm::StringFilter filter_;
 };
+
+/// A vendor's private table-position tags: the private creator that owns them, their group and
+/// their element offsets within the block the creator reserves (PS3.5 7.8.1).
+struct PrivateTableTags {
+  const char* creator;
+  std::uint16_t group;
+  std::uint8_t vertical, longitudinal, lateral;
+  const char* note;
+};
+
+/// The creators gimm reads the table from, in order of preference. The offsets are those of
+/// GDCM's private dictionary; DLX_SERIE_01's were checked on real GE DL (Innova) files, whose
+/// (0019,0010) is DLX_SERIE_01 while GEMS_DL_IMG_01 at (0019,0011) owns (0019,11xx).
+inline constexpr PrivateTableTags kKnownTableCreators[] = {
+    {"DLX_SERIE_01", 0x0019, 0x21, 0x22, 0x23, "GE DL series block (verified on real files)"},
+    {"GEMS_DL_FRAME_01", 0x0025, 0x1B, 0x1C, 0x1D, "GE DL frame block (GDCM's dictionary)"},
+};
+
+/// PS3.5 7.8.1: a private creator element (gggg,00xx), xx in 10-FF, reserves the elements
+/// (gggg,xx00-xxFF) for its owner. Returns xx for `creator` in odd `group`, or nullopt. The
+/// creator's value is compared whole (blanks trimmed), not by prefix.
+inline std::optional<std::uint8_t> private_block(const TagReader& tags, std::uint16_t group,
+                                                 const std::string& creator) {
+  for (int xx = 0x10; xx <= 0xFF; ++xx) {
+    const auto value = tags.peek(gdcm::Tag(group, std::uint16_t(xx)));
+    if (value && *value == creator) return std::uint8_t(xx);
+  }
+  return std::nullopt;
+}
+
+/// The table's (lateral, vertical, longitudinal) tags as read, where they came from, and the
+/// warnings about table-like tags that were not used.
+struct TableRead {
+  std::optional<std::vector<double>> values[3];  // lateral, vertical, longitudinal
+  std::string source = "none";
+  std::vector<std::string> warnings;
+};
+
+inline bool has_table_word(std::string name) {
+  std::transform(name.begin(), name.end(), name.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return name.find("table") != std::string::npos &&
+         (name.find("vertical") != std::string::npos ||
+          name.find("longitudinal") != std::string::npos ||
+          name.find("lateral") != std::string::npos || name.find("position") != std::string::npos);
+}
+
+/// Whether GDCM's private dictionary knows any element of `creator` in `group`.
+inline bool creator_in_dictionary(std::uint16_t group, const std::string& creator) {
+  const gdcm::PrivateDict& dict = gdcm::Global::GetInstance().GetDicts().GetPrivateDict();
+  for (int offset = 0x00; offset <= 0xFF; ++offset) {
+    const char* name =
+        dict.GetDictEntry(gdcm::PrivateTag(group, std::uint16_t(offset), creator.c_str()))
+            .GetName();
+    if (name && *name) return true;
+  }
+  return false;
+}
+
+/// Private elements that look like a table position and were not read: named in a warning, so a
+/// table under a creator gimm does not know is not dropped without a word. "Looks like": GDCM's
+/// private dictionary names it a table position, or its creator is unknown to the dictionary and
+/// it sits at a known table offset of a known table group.
+inline void warn_unused_table_tags(const TagReader& tags, const gdcm::DataSet& ds,
+                                   const std::string& used_creator, std::vector<std::string>& out) {
+  const gdcm::Dicts& dicts = gdcm::Global::GetInstance().GetDicts();
+  for (const gdcm::DataElement& de : ds.GetDES()) {
+    const gdcm::Tag tag = de.GetTag();
+    const std::uint16_t group = tag.GetGroup(), element = tag.GetElement();
+    if (group % 2 == 0 || element < 0x1000) continue;  // public, or a creator itself
+    const auto creator = tags.peek(gdcm::Tag(group, std::uint16_t(element >> 8)));
+    if (!creator || *creator == used_creator) continue;
+    const std::uint8_t offset = std::uint8_t(element & 0xFF);
+    const gdcm::DictEntry& entry =
+        dicts.GetPrivateDict().GetDictEntry(gdcm::PrivateTag(group, offset, creator->c_str()));
+    const std::string name = entry.GetName() ? entry.GetName() : "";
+    bool table_like = !name.empty() && has_table_word(name);
+    if (name.empty() && !creator_in_dictionary(group, *creator))
+      for (const auto& known : kKnownTableCreators)
+        table_like |=
+            group == known.group &&
+            (offset == known.vertical || offset == known.longitudinal || offset == known.lateral);
+    if (!table_like) continue;
+    const auto value = tags.peek(tag);
+    out.push_back(tag_string(group, element) + " = " + (value ? *value : "(empty)") +
+                  " under private creator '" + *creator + "'" +
+                  (name.empty() ? " (unknown to gimm) sits where GE writes a table position"
+                                : " is '" + name + "'") +
+                  ": not used for the table" +
+                  (used_creator.empty() ? "; give the table by hand if it is one" : ""));
+  }
+}
+
+/// The table position: a known vendor block (kKnownTableCreators) found by the PS3.5 rule, else
+/// the standard TableTop{Vertical,Longitudinal,Lateral}Position (300A,0128-012A).
+inline TableRead read_table(TagReader& tags) {
+  TableRead out;
+  std::string used_creator;
+  for (const auto& known : kKnownTableCreators) {
+    const auto block = private_block(tags, known.group, known.creator);
+    if (!block) continue;
+    const auto element = [&](std::uint8_t offset) {
+      return std::uint16_t(std::uint16_t(*block) << 8 | offset);
+    };
+    const std::string who =
+        std::string(known.creator) + " " + tag_string(known.group, *block) + ", " + known.note;
+    const std::string use = "table position, mm (" + who + ")";
+    tags.uses.push_back({tag_string(known.group, *block), "PrivateCreator", known.creator,
+                         "owns " + tag_string(known.group, element(0)).substr(0, 8) +
+                             "xx) (PS3.5 7.8.1): the table is read there"});
+    out.values[1] = tags.numbers(known.group, element(known.vertical), "TableVerticalPosition", use,
+                                 "absent", 1);
+    out.values[2] = tags.numbers(known.group, element(known.longitudinal),
+                                 "TableLongitudinalPosition", use, "absent", 1);
+    out.values[0] =
+        tags.numbers(known.group, element(known.lateral), "TableLateralPosition", use, "absent", 1);
+    if (out.values[0] || out.values[1] || out.values[2]) {
+      out.source = "private " + who + ": vertical " +
+                   tag_string(known.group, element(known.vertical)) + ", longitudinal " +
+                   tag_string(known.group, element(known.longitudinal)) + ", lateral " +
+                   tag_string(known.group, element(known.lateral));
+      used_creator = known.creator;
+      break;
+    }
+  }
+  if (used_creator.empty()) {
+    out.values[1] =
+        tags.numbers(0x300A, 0x0128, "TableTopVerticalPosition", "table position, mm", "absent", 1);
+    out.values[2] = tags.numbers(0x300A, 0x0129, "TableTopLongitudinalPosition",
+                                 "table position, mm", "absent", 1);
+    out.values[0] =
+        tags.numbers(0x300A, 0x012A, "TableTopLateralPosition", "table position, mm", "absent", 1);
+    if (out.values[0] || out.values[1] || out.values[2]) out.source = "standard (300A,0128-012A)";
+  }
+  warn_unused_table_tags(tags, tags.data_set(), used_creator, out.warnings);
+  return out;
+}
+
+/// Whether stored pixel (row r, column c), 0-based, is inside the polygon of 1-based (row,
+/// column) vertices (DICOM's pixel coordinates: the first pixel is 1\1).
+inline bool inside_polygon(const std::vector<double>& rc, double r, double c) {
+  bool inside = false;
+  const std::size_t n = rc.size() / 2;
+  for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
+    const double ri = rc[2 * i] - 1, ci = rc[2 * i + 1] - 1, rj = rc[2 * j] - 1,
+                 cj = rc[2 * j + 1] - 1;
+    if ((ri > r) != (rj > r) && c < (cj - ci) * (r - ri) / (rj - ri) + ci) inside = !inside;
+  }
+  return inside;
+}
+
+/// The Display Shutter module (PS3.3 C.7.6.11): the exposed field in stored orientation, 1
+/// inside every shutter the file names (they intersect), or nullopt when there is none.
+/// Coordinates are 1-based pixel rows and columns; edges are inside.
+inline std::optional<Image<float>> shutter_field(TagReader& tags, int rows, int cols,
+                                                 const std::string& path, std::string& source,
+                                                 std::vector<std::string>& warnings) {
+  const auto shape = tags.text(0x0018, 0x1600, "ShutterShape", "the exposed field", "absent");
+  if (!shape) return std::nullopt;
+  Image<float> field(rows, cols, 1.0f);
+  std::stringstream in(*shape);
+  std::string one;
+  const auto need = [&](std::uint16_t e, const char* name, int count) {
+    const auto v = tags.numbers(0x0018, e, name, "shutter, 1-based px", "absent", count);
+    GIMM_CHECK(v, path << ": (0018,1600) ShutterShape names " << one << " but " << name << " "
+                       << tag_string(0x0018, e) << " is absent");
+    return *v;
+  };
+  while (std::getline(in, one, '\\')) {
+    one = trimmed(one);
+    if (one == "RECTANGULAR") {
+      const double left = need(0x1602, "ShutterLeftVerticalEdge", 1)[0];
+      const double right = need(0x1604, "ShutterRightVerticalEdge", 1)[0];
+      const double upper = need(0x1606, "ShutterUpperHorizontalEdge", 1)[0];
+      const double lower = need(0x1608, "ShutterLowerHorizontalEdge", 1)[0];
+      GIMM_CHECK(left < right && upper < lower, path << ": rectangular shutter with left " << left
+                                                     << ", right " << right << ", upper " << upper
+                                                     << ", lower " << lower
+                                                     << ": left must be < right and upper < lower");
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c)
+          if (c + 1 < left || c + 1 > right || r + 1 < upper || r + 1 > lower) field(r, c) = 0;
+    } else if (one == "CIRCULAR") {
+      const auto centre = need(0x1610, "CenterOfCircularShutter", 2);  // row \ column
+      const double radius = need(0x1612, "RadiusOfCircularShutter", 1)[0];
+      GIMM_CHECK(radius > 0,
+                 path << ": (0018,1612) RadiusOfCircularShutter must be > 0, got " << radius);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c)
+          if (std::hypot(r + 1 - centre[0], c + 1 - centre[1]) > radius) field(r, c) = 0;
+    } else if (one == "POLYGONAL") {
+      const auto v = need(0x1620, "VerticesOfThePolygonalShutter", 0);
+      GIMM_CHECK(v.size() >= 6 && v.size() % 2 == 0,
+                 path << ": (0018,1620) VerticesOfThePolygonalShutter holds " << v.size()
+                      << " numbers; at least 3 row\\column pairs expected");
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c)
+          if (!inside_polygon(v, r, c)) field(r, c) = 0;
+    } else if (one == "BITMAP") {
+      warnings.push_back(
+          "(0018,1600) ShutterShape BITMAP (an overlay plane) is not read: that "
+          "shutter is left out of the field (the image-based field still applies)");
+    } else {
+      GIMM_FAIL(path << ": (0018,1600) ShutterShape '" << one
+                     << "' is not RECTANGULAR, CIRCULAR, POLYGONAL or BITMAP");
+    }
+  }
+  source = "shutter " + *shape + " (0018,1600)";
+  return field;
+}
 
 /// Undoes FieldOfViewRotation (clockwise, degrees) and then the horizontal flip applied after
 /// it: stored = flip(rotate_cw(detector)), so detector = rotate_ccw(flip(stored)).
@@ -688,6 +941,14 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
       !flip || *flip == "YES" || *flip == "NO",
       path << ": (0018,7034) FieldOfViewHorizontalFlip must be YES or NO, got '" << *flip << "'");
   out.image = detail::to_detector_orientation(stored, rotation_deg, flip && *flip == "YES");
+  // The shutters, in stored pixels like the image, turned the same way.
+  if (const auto shutter =
+          detail::shutter_field(tags, rows, cols, path, out.field_source, out.warnings)) {
+    const Image<float> field =
+        detail::to_detector_orientation(*shutter, rotation_deg, flip && *flip == "YES");
+    out.field.resize(field.rows(), field.cols());
+    for (std::size_t k = 0; k < field.size(); ++k) out.field.data()[k] = field.data()[k] > 0.5f;
+  }
   CArm& carm = out.carm;
   carm.rows = out.image.rows();
   carm.cols = out.image.cols();
@@ -722,10 +983,19 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
                                     "IntensifierSize is present; give the detector pixel pitch "
                                     "(--pixel MM)");
     row_pitch = col_pitch = intensifier->front() / double(cols);
+    // The other candidate, FieldOfViewDimensions / Columns, is reported, not used: on eight real
+    // GE DL views (0.400 vs 0.3906 mm) the IntensifierSize rule fit at least as well.
+    const auto fov = tags.numbers(0x0018, 0x1149, "FieldOfViewDimensions",
+                                  "not used: the pitch it implies is reported", "absent", 0);
+    std::ostringstream other;
+    if (fov && !fov->empty())
+      other << "; (0018,1149) FieldOfViewDimensions / Columns would give "
+            << fov->front() / double(cols) << " mm";
     out.warnings.push_back(
         "(0018,1164) ImagerPixelSpacing is absent: pixel pitch = (0018,1162) "
         "IntensifierSize / Columns = " +
-        std::to_string(col_pitch) + " mm (worth a few px; --pixel overrides)");
+        std::to_string(col_pitch) + " mm" + other.str() +
+        " (worth a few px at the field's edge; a per-view pitch overrides)");
   }
   GIMM_CHECK(row_pitch > 0 && col_pitch > 0,
              path << ": pixel pitch must be > 0 mm, got " << row_pitch << " x " << col_pitch);
@@ -778,27 +1048,10 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
                     << "; gimm maps the table for HFS and FFS only");
   carm.patient_position =
       position && *position == "FFS" ? PatientPosition::FFS : PatientPosition::HFS;
-  const auto creator = tags.text(0x0019, 0x0010, "PrivateCreator(0019,10xx)",
-                                 "GE's table tags when it starts with GEMS", "absent");
-  const bool ge = creator && creator->rfind("GEMS", 0) == 0;
-  const auto table_tag = [&](std::uint16_t g, std::uint16_t e, const char* name, bool use) {
-    return use ? tags.numbers(g, e, name, "table position, mm", "absent", 1)
-               : std::optional<std::vector<double>>{};
-  };
-  auto vertical = table_tag(0x0019, 0x1021, "GE TableVertical", ge);
-  auto longitudinal = table_tag(0x0019, 0x1022, "GE TableLongitudinal", ge);
-  auto lateral = table_tag(0x0019, 0x1023, "GE TableLateral", ge);
-  if (vertical || longitudinal || lateral) {
-    out.table_source = "GE private (0019,1021-1023)";
-  } else {
-    vertical =
-        tags.numbers(0x300A, 0x0128, "TableTopVerticalPosition", "table position, mm", "absent", 1);
-    longitudinal = tags.numbers(0x300A, 0x0129, "TableTopLongitudinalPosition",
-                                "table position, mm", "absent", 1);
-    lateral =
-        tags.numbers(0x300A, 0x012A, "TableTopLateralPosition", "table position, mm", "absent", 1);
-    if (vertical || longitudinal || lateral) out.table_source = "standard (300A,0128-012A)";
-  }
+  auto table = detail::read_table(tags);
+  out.table_source = table.source;
+  for (auto& w : table.warnings) out.warnings.push_back(std::move(w));
+  const auto& [lateral, vertical, longitudinal] = table.values;
   const auto or_zero = [](const std::optional<std::vector<double>>& v) {
     return v ? v->front() : 0.0;
   };
@@ -816,10 +1069,22 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
 /// The explain report: every tag looked at, its value and use; then the warnings.
 inline std::string explain(const XaFrame& frame) {
   std::ostringstream os;
-  os << frame.path << ": frame " << frame.frame << " of " << frame.frames << ", " << frame.carm.cols
-     << " x " << frame.carm.rows << " px; table: " << frame.table_source << "\n";
+  const CArm& c = frame.carm;
+  os << frame.path << ": frame " << frame.frame << " of " << frame.frames << ", " << c.cols << " x "
+     << c.rows << " px; table: " << frame.table_source << "\n";
   for (const auto& t : frame.tags)
     os << "  " << t.tag << " " << t.name << " = " << t.value << "  -> " << t.use << "\n";
+  const auto mm = [](const Eigen::Vector3d& v) {
+    std::ostringstream s;
+    s << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+    return s.str();
+  };
+  os << "  table (lateral, vertical, longitudinal): " << mm(c.table_mm) << " mm, reference "
+     << mm(c.reference_table_mm) << " mm; the patient moved " << mm(c.table_shift())
+     << " mm (patient x, y, z; " << to_string(c.patient_position)
+     << "), so this view's isocentre is " << mm(c.isocenter) << " - " << mm(c.table_shift())
+     << " = " << mm(c.view_isocenter()) << " mm\n";
+  os << "  exposed field: " << frame.field_source << "\n";
   for (const auto& w : frame.warnings) os << "  warning: " << w << "\n";
   return os.str();
 }
@@ -891,7 +1156,7 @@ inline void write_xa_dicom(const std::string& path, const Image<float>& image, c
   put(0x0018, 0x1111, gdcm::VR::DS, number(carm.sod_mm));
   put(0x0018, 0x5100, gdcm::VR::CS, to_string(carm.patient_position));
   if (ge_table) {
-    put(0x0019, 0x0010, gdcm::VR::LO, "GEMS_ACQU_01");
+    put(0x0019, 0x0010, gdcm::VR::LO, "DLX_SERIE_01");  // GE DL's table block
     put(0x0019, 0x1021, gdcm::VR::DS, number(carm.table_mm.y()));
     put(0x0019, 0x1022, gdcm::VR::DS, number(carm.table_mm.z()));
     put(0x0019, 0x1023, gdcm::VR::DS, number(carm.table_mm.x()));

@@ -59,6 +59,7 @@
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/match/centerline_graph.hpp"
 #include "gimm/match/epipolar_meetings.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/vesselness.hpp"
 
@@ -515,9 +516,11 @@ struct ViewBuffers {
 
 /// A view's vessels and centerlines: from `mask` when given, else segmented from the image;
 /// worked out in `buffers`.
+/// Vessels outside `field` (when given: the exposed field) are dropped before the centerlines.
 inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_t>* mask,
                               const Camerad& camera, const Eigen::Vector3d& isocentre,
-                              const GeometricOptions& o, ViewBuffers& buffers) {
+                              const GeometricOptions& o, ViewBuffers& buffers,
+                              const Image<std::uint8_t>* field = nullptr) {
   VesselView v;
   v.image = image;
   v.camera = camera;
@@ -536,6 +539,7 @@ inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_
     segment_vessels(*image, seg, v.mask, buffers.segmentation);
     v.segmented = true;
   }
+  if (field) clear_outside(v.mask, *field);
   v.graph = centerline_graph(v.mask, o.min_branch_px, buffers.centerlines);
   return v;
 }
@@ -715,10 +719,10 @@ class GeometricMatcher : public PairMatcher {
     std::future<VesselView> b_later =
         std::async(options_.two_threads ? std::launch::async : std::launch::deferred, [&] {
           return vessel_view(pair.image_b, masks ? pair.truth->mask_b.get() : nullptr,
-                             *pair.camera_b, iso, options_, *buffers_b);
+                             *pair.camera_b, iso, options_, *buffers_b, pair.field_b);
         });
     const VesselView a = vessel_view(pair.image_a, masks ? pair.truth->mask_a.get() : nullptr,
-                                     *pair.camera_a, iso, options_, *buffers_a);
+                                     *pair.camera_a, iso, options_, *buffers_a, pair.field_a);
     const VesselView b = b_later.get();
     return geometric_matches(a, b, options_);
   }

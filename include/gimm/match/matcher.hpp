@@ -26,6 +26,10 @@ struct PairInput {
   int class_a = kUnknownViewClass, class_b = kUnknownViewClass;
   std::optional<Camerad> camera_a, camera_b;  ///< both or neither
   const PairTruth* truth = nullptr;           ///< dataset mode: labels, exact F, masks
+  /// The exposed fields (1 where the collimator let X-rays through; match/field_of_view.hpp),
+  /// each the size of its image; null: the whole image. Matches are made inside them only.
+  const Image<std::uint8_t>* field_a = nullptr;
+  const Image<std::uint8_t>* field_b = nullptr;
 };
 
 class PairMatcher {
