@@ -22,11 +22,11 @@ constexpr int kVesselCol = 160;                    // the vessel's axis, a verti
 constexpr double kSlabMm = 200;                    // water a chest-sized patient holds
 
 /// Line integrals of a kSlabMm water slab holding a vertical cylinder of iodinated blood
-/// (diameter `diameter_mm` at the isocentre, magnified on the detector) at the formation's
-/// iodine and energy; each pixel integrates the intensity of 16 sub-columns (partial volume
+/// (diameter `diameter_mm` at the isocentre, magnified on the detector) with contrast `c`; each
+/// pixel integrates the intensity of 16 sub-columns (partial volume
 /// as a detector sees it).
-Image<float> slab_with_vessel(const AngiogramFormation& f, double diameter_mm = 3.0) {
-  const double mu_water = water_mu_per_mm(f.effective_kev), mu_lumen = f.lumen_mu_per_mm();
+Image<float> slab_with_vessel(const IodineContrast& c = {}, double diameter_mm = 3.0) {
+  const double mu_water = water_mu_per_mm(c.effective_kev), mu_lumen = c.lumen_mu_per_mm();
   const double r = diameter_mm / 2;
   Image<float> out(kRows, kCols);
   for (int c = 0; c < kCols; ++c) {
@@ -122,14 +122,15 @@ TEST_CASE("Iodine and water follow the NIST table, with the K edge", "[render][f
   CHECK(iodinated_blood_mu_per_mm(175, 55) == Approx(0.19013).epsilon(5e-4));
   CHECK(blood_mu_per_mm(55) == Approx(0.022861).epsilon(5e-4));
   // A 3 mm lumen at the defaults adds 0.4-0.55 to the line integral at its centre.
-  const AngiogramFormation f;
-  const double added = 3.0 * (f.lumen_mu_per_mm() - blood_mu_per_mm(f.effective_kev));
+  const IodineContrast contrast;
+  const double added = 3.0 * (contrast.lumen_mu_per_mm() - contrast.blood_mu_per_mm());
   INFO("3 mm lumen: " << added);
   CHECK((added > 0.4 && added < 0.55));
   // More iodine, more attenuation; higher energy (above the edge), less.
   CHECK(iodinated_blood_mu_per_mm(300, 55) > iodinated_blood_mu_per_mm(150, 55));
   CHECK(iodinated_blood_mu_per_mm(175, 70) < iodinated_blood_mu_per_mm(175, 50));
   CHECK(hu_equivalent(water_mu_per_mm(60), 60) == Approx(0.0).margin(1e-9));
+  CHECK(contrast.lumen_hu() == Approx(1000 * (0.19013 / 0.021567 - 1)).epsilon(1e-3));
   CHECK_THROWS_WITH(iodine_mass_attenuation(25),
                     Catch::Contains("energy") && Catch::Contains("25"));
   CHECK_THROWS_WITH(iodinated_blood_mu_per_mm(-5, 55),
@@ -155,7 +156,7 @@ TEST_CASE("The broad blur matches a direct Gaussian", "[render][formation]") {
 
 TEST_CASE("Each acquisition step does what its physics says", "[render][formation]") {
   Rng rng(1);
-  const Image<float> scene = slab_with_vessel(AngiogramFormation{});
+  const Image<float> scene = slab_with_vessel();
   const double background = scene(128, 20), centre = scene(128, kVesselCol);
   const double od = centre - background;  // the lumen's optical depth over the slab
 
@@ -219,7 +220,7 @@ TEST_CASE("Each acquisition step does what its physics says", "[render][formatio
 TEST_CASE("A 3 mm vessel in a water slab looks as in clinical frames at the defaults",
           "[render][formation]") {
   const AngiogramFormation defaults;
-  const Image<float> scene = slab_with_vessel(defaults);
+  const Image<float> scene = slab_with_vessel();
   AngiogramFormation quiet = defaults;
   quiet.detector_photons = 0;
   Rng rng(7);
@@ -239,7 +240,7 @@ TEST_CASE("A 3 mm vessel in a water slab looks as in clinical frames at the defa
 
 TEST_CASE("Formation is deterministic in its seed", "[render][formation]") {
   const AngiogramFormation f;
-  const Image<float> scene = slab_with_vessel(f);
+  const Image<float> scene = slab_with_vessel();
   Rng a(11), b(11), c(12);
   const FormedAngiogram x = form_angiogram(scene, kPixelMm, f, a);
   const FormedAngiogram y = form_angiogram(scene, kPixelMm, f, b);
@@ -338,12 +339,6 @@ TEST_CASE("validate() names the bad parameter and value", "[render][formation]")
   f.detector_photons = 5;
   rejects(f, "detector_photons", "5");
   f = {};
-  f.effective_kev = 120;
-  rejects(f, "effective_kev", "120");
-  f = {};
-  f.iodine_mg_per_ml = 500;
-  rejects(f, "iodine_mg_per_ml", "500");
-  f = {};
   f.gamma = 0;
   rejects(f, "gamma", "0");
   f = {};
@@ -361,6 +356,18 @@ TEST_CASE("validate() names the bad parameter and value", "[render][formation]")
   f = {};
   f.shutter.radius = 3;
   rejects(f, "radius", "3");
+  IodineContrast contrast;
+  contrast.effective_kev = 120;
+  CHECK_THROWS_WITH(contrast.validate(),
+                    Catch::Contains("effective_kev") && Catch::Contains("120"));
+  contrast = {};
+  contrast.iodine_mg_per_ml = 500;
+  CHECK_THROWS_WITH(contrast.validate(),
+                    Catch::Contains("iodine_mg_per_ml") && Catch::Contains("500"));
+  IodineContrastRanges contrast_ranges;
+  contrast_ranges.effective_kev = {20, 60};
+  CHECK_THROWS_WITH(contrast_ranges.validate(),
+                    Catch::Contains("effective_kev") && Catch::Contains("20"));
   // The chain checks its inputs.
   Rng rng(0);
   Image<float> bad(4, 4, 1.0f);
@@ -394,6 +401,14 @@ TEST_CASE("The JSON record round-trips and refuses bad fields", "[render][format
     CHECK(back.shutter.shape == f.shutter.shape);
     CHECK(back.shutter.center_v == f.shutter.center_v);
   }
+  for (int k = 0; k < 4; ++k) {
+    const IodineContrast c = randomize(IodineContrastRanges{}, rng);
+    const IodineContrast back = iodine_contrast_from_json(to_json(c), "view");
+    CHECK(back.iodine_mg_per_ml == c.iodine_mg_per_ml);
+    CHECK(back.effective_kev == c.effective_kev);
+  }
+  CHECK_THROWS_WITH(iodine_contrast_from_json({{"iodine_mg_per_ml", 175}}, "view 2"),
+                    Catch::Contains("effective_kev") && Catch::Contains("view 2"));
   nlohmann::json j = to_json(AngiogramFormation{});
   j["gamma"] = -1;
   CHECK_THROWS_AS(angiogram_formation_from_json(j, "view 3"), FormatError);
@@ -422,16 +437,18 @@ TEST_CASE("Randomised formations stay inside their ranges and mostly the clinica
   const int draws = 40;
   double lowest_contrast = 1, highest_contrast = 0, lowest_cnr = 1e9, highest_cnr = 0;
   for (int k = 0; k < draws; ++k) {
+    const IodineContrast contrast = randomize(IodineContrastRanges{}, rng);
+    CHECK((contrast.iodine_mg_per_ml >= 140 && contrast.iodine_mg_per_ml <= 240));
     AngiogramFormation f = randomize(ranges, rng);
     CHECK_NOTHROW(f.validate());
     CHECK((f.scatter_to_primary >= 0.3 && f.scatter_to_primary <= 0.9));
     CHECK((f.detector_photons >= 2500 && f.detector_photons <= 12000));
-    CHECK((f.iodine_mg_per_ml >= 140 && f.iodine_mg_per_ml <= 240));
     ++shapes[static_cast<int>(f.shutter.shape)];
     // The measurement needs the vessel and the noise patch inside the field.
     f.shutter.shape = ShutterShape::none;
     Rng noise = rng.fork(static_cast<std::uint64_t>(k));
-    const Measured m = measure(form_angiogram(slab_with_vessel(f), kPixelMm, f, noise).display);
+    const Measured m =
+        measure(form_angiogram(slab_with_vessel(contrast), kPixelMm, f, noise).display);
     lowest_contrast = std::min(lowest_contrast, m.contrast);
     highest_contrast = std::max(highest_contrast, m.contrast);
     lowest_cnr = std::min(lowest_cnr, m.cnr);

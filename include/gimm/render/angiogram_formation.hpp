@@ -27,9 +27,8 @@
 ///   quantise    v = round(v (2^bits - 1)) / (2^bits - 1)
 /// Display convention as gimm's images: [0, 1], bright background, dark vessels.
 ///
-/// The iodine of the injection is set where the attenuation is built (render/iodine.hpp:
-/// iodinated_blood_mu_per_mm(iodine_mg_per_ml, effective_kev)); the two values are kept here
-/// so that one record says how a view was made, and so they are randomised with the rest.
+/// The iodine of the injection is not a step here: it acts where the attenuation is built
+/// (render/iodine.hpp, IodineContrast), before the line integrals. This chain is what follows.
 ///
 /// Deterministic: all noise comes from the caller's gimm::Rng, drawn in row-major pixel order.
 #include <algorithm>
@@ -66,12 +65,6 @@ inline const char* to_string(WindowMode m) {
 /// Every parameter with its unit, the range validate() accepts, and the clinical default
 /// (docs/realism.md gives the source of each).
 struct AngiogramFormation {
-  // Contrast (used where the attenuation is built; render/iodine.hpp).
-  /// Iodine in the injected lumen, mgI/mL, [0, 400]: 350 mgI/mL contrast half diluted by blood.
-  double iodine_mg_per_ml = 175;
-  /// Effective (mean, after the patient) beam energy, keV, [30, 100]: 70-90 kVp cardiac beams
-  /// with 0.1-0.9 mm Cu filtration.
-  double effective_kev = 55;
   // Acquisition.
   /// Scatter-to-primary ratio behind the anti-scatter grid, [0, 3]; cardiac 0.3-1.
   double scatter_to_primary = 0.5;
@@ -112,8 +105,6 @@ struct AngiogramFormation {
                  "angiogram formation: " << name << " must be in [" << lo << ", " << hi << "]"
                                          << unit << ", got " << v);
     };
-    in("iodine_mg_per_ml", iodine_mg_per_ml, 0, 400, " mgI/mL");
-    in("effective_kev", effective_kev, kIodineTableMinKev, kIodineTableMaxKev, " keV");
     in("scatter_to_primary", scatter_to_primary, 0, 3, "");
     in("scatter_sigma_mm", scatter_sigma_mm, 1, 200, " mm");
     in("focal_spot_blur_px", focal_spot_blur_px, 0, 8, " px");
@@ -135,11 +126,6 @@ struct AngiogramFormation {
     GIMM_CHECK(bits == 0 || bits == 8 || bits == 16,
                "angiogram formation: bits must be 0 (float), 8 or 16, got " << bits);
     shutter.validate();
-  }
-
-  /// The injected lumen's attenuation at this formation's iodine and energy, mm^-1.
-  double lumen_mu_per_mm() const {
-    return iodinated_blood_mu_per_mm(iodine_mg_per_ml, effective_kev);
   }
 };
 
@@ -321,8 +307,6 @@ struct Interval {
 /// rest (weak iodine at a hard beam, strong scatter and a wide window all at once; measured in
 /// tests/render/angiogram_formation_test.cpp).
 struct AngiogramFormationRanges {
-  Interval iodine_mg_per_ml{140, 240};
-  Interval effective_kev{50, 66};
   Interval scatter_to_primary{0.3, 0.9};
   Interval scatter_sigma_mm{20, 80};
   Interval focal_spot_blur_px{0.2, 1.0};
@@ -349,8 +333,6 @@ struct AngiogramFormationRanges {
   /// Every interval ordered and inside the parameter's valid range; weights usable.
   void validate() const {
     const std::pair<const char*, Interval> all[] = {
-        {"iodine_mg_per_ml", iodine_mg_per_ml},
-        {"effective_kev", effective_kev},
         {"scatter_to_primary", scatter_to_primary},
         {"scatter_sigma_mm", scatter_sigma_mm},
         {"focal_spot_blur_px", focal_spot_blur_px},
@@ -398,8 +380,6 @@ struct AngiogramFormationRanges {
   AngiogramFormation at(double t) const {
     const auto x = [t](Interval iv) { return iv.lo + t * (iv.hi - iv.lo); };
     AngiogramFormation f;
-    f.iodine_mg_per_ml = x(iodine_mg_per_ml);
-    f.effective_kev = x(effective_kev);
     f.scatter_to_primary = x(scatter_to_primary);
     f.scatter_sigma_mm = x(scatter_sigma_mm);
     f.focal_spot_blur_px = x(focal_spot_blur_px);
@@ -429,8 +409,6 @@ inline AngiogramFormation randomize(const AngiogramFormationRanges& ranges, Rng&
   ranges.validate();
   const auto draw = [&rng](Interval iv) { return iv.lo + (iv.hi - iv.lo) * rng.uniform(); };
   AngiogramFormation f;
-  f.iodine_mg_per_ml = draw(ranges.iodine_mg_per_ml);
-  f.effective_kev = draw(ranges.effective_kev);
   f.scatter_to_primary = draw(ranges.scatter_to_primary);
   f.scatter_sigma_mm = draw(ranges.scatter_sigma_mm);
   f.focal_spot_blur_px = draw(ranges.focal_spot_blur_px);
@@ -462,6 +440,37 @@ inline AngiogramFormation randomize(const AngiogramFormationRanges& ranges, Rng&
   f.shutter.frame_level = draw(ranges.shutter_frame_level);
   f.validate();
   return f;
+}
+
+/// Ranges of the injection's contrast (render/iodine.hpp), drawn per patient and system where
+/// the attenuation is built: about half-diluted 300-370 mgI/mL contrast, 70-90 kVp beams.
+struct IodineContrastRanges {
+  Interval iodine_mg_per_ml{140, 240};
+  Interval effective_kev{50, 66};
+
+  void validate() const {
+    for (const auto& [name, iv] :
+         {std::pair<const char*, Interval>{"iodine_mg_per_ml", iodine_mg_per_ml},
+          {"effective_kev", effective_kev}})
+      GIMM_CHECK(std::isfinite(iv.lo) && std::isfinite(iv.hi) && iv.lo <= iv.hi,
+                 "iodine contrast ranges: " << name << " must be finite with lo <= hi, got ["
+                                            << iv.lo << ", " << iv.hi << "]");
+    IodineContrast lo{iodine_mg_per_ml.lo, effective_kev.lo};
+    IodineContrast hi{iodine_mg_per_ml.hi, effective_kev.hi};
+    lo.validate();
+    hi.validate();
+  }
+};
+
+/// One contrast drawn from `ranges` (two draws), deterministic from `rng`.
+inline IodineContrast randomize(const IodineContrastRanges& ranges, Rng& rng) {
+  ranges.validate();
+  IodineContrast c;
+  c.iodine_mg_per_ml = ranges.iodine_mg_per_ml.lo +
+                       (ranges.iodine_mg_per_ml.hi - ranges.iodine_mg_per_ml.lo) * rng.uniform();
+  c.effective_kev =
+      ranges.effective_kev.lo + (ranges.effective_kev.hi - ranges.effective_kev.lo) * rng.uniform();
+  return c;
 }
 
 }  // namespace gimm

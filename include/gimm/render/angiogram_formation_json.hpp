@@ -1,6 +1,6 @@
 #pragma once
 /// AngiogramFormation <-> JSON (nlohmann_json), the per-view record of how a frame was formed:
-///   {"iodine_mg_per_ml": 175, "effective_kev": 55, ..., "window": "percentile", "bits": 8,
+///   {"scatter_to_primary": 0.5, ..., "window": "percentile", "bits": 8,
 ///    "shutter": {"shape": "rectangular", "half_width": 0.92, ...}}
 /// Keys are the struct's member names, numbers in the units the struct documents. Reading
 /// requires every key, refuses unknown ones (a misspelt key in a hand-written config would
@@ -24,9 +24,7 @@ inline nlohmann::json to_json(const Shutter& s) {
 }
 
 inline nlohmann::json to_json(const AngiogramFormation& f) {
-  return {{"iodine_mg_per_ml", f.iodine_mg_per_ml},
-          {"effective_kev", f.effective_kev},
-          {"scatter_to_primary", f.scatter_to_primary},
+  return {{"scatter_to_primary", f.scatter_to_primary},
           {"scatter_sigma_mm", f.scatter_sigma_mm},
           {"focal_spot_blur_px", f.focal_spot_blur_px},
           {"detector_blur_px", f.detector_blur_px},
@@ -85,8 +83,6 @@ inline AngiogramFormation angiogram_formation_from_json(const nlohmann::json& j,
                                                         const std::string& where) {
   detail::check_known_keys(j, to_json(AngiogramFormation{}), where);
   AngiogramFormation f;
-  f.iodine_mg_per_ml = json_number(j, "iodine_mg_per_ml", where);
-  f.effective_kev = json_number(j, "effective_kev", where);
   f.scatter_to_primary = json_number(j, "scatter_to_primary", where);
   f.scatter_sigma_mm = json_number(j, "scatter_sigma_mm", where);
   f.focal_spot_blur_px = json_number(j, "focal_spot_blur_px", where);
@@ -119,6 +115,23 @@ inline AngiogramFormation angiogram_formation_from_json(const nlohmann::json& j,
     throw FormatError(std::string(e.what()) + " (" + where + ")");
   }
   return f;
+}
+
+inline nlohmann::json to_json(const IodineContrast& c) {
+  return {{"iodine_mg_per_ml", c.iodine_mg_per_ml}, {"effective_kev", c.effective_kev}};
+}
+
+inline IodineContrast iodine_contrast_from_json(const nlohmann::json& j, const std::string& where) {
+  detail::check_known_keys(j, to_json(IodineContrast{}), where);
+  IodineContrast c;
+  c.iodine_mg_per_ml = json_number(j, "iodine_mg_per_ml", where);
+  c.effective_kev = json_number(j, "effective_kev", where);
+  try {
+    c.validate();
+  } catch (const Error& e) {
+    throw FormatError(std::string(e.what()) + " (" + where + ")");
+  }
+  return c;
 }
 
 }  // namespace gimm
