@@ -134,4 +134,34 @@ inline IodineContrast iodine_contrast_from_json(const nlohmann::json& j, const s
   return c;
 }
 
+/// The randomisation ranges as a record (the dataset manifest's parameters): each interval as
+/// [lo, hi], the shape weights by name.
+inline nlohmann::json to_json(const AngiogramFormationRanges& r) {
+  const auto iv = [](Interval i) { return nlohmann::json::array({i.lo, i.hi}); };
+  return {{"scatter_to_primary", iv(r.scatter_to_primary)},
+          {"scatter_sigma_mm", iv(r.scatter_sigma_mm)},
+          {"focal_spot_blur_px", iv(r.focal_spot_blur_px)},
+          {"detector_blur_px", iv(r.detector_blur_px)},
+          {"detector_photons", iv(r.detector_photons)},
+          {"electronic_noise", iv(r.electronic_noise)},
+          {"range_compression", iv(r.range_compression)},
+          {"range_compression_sigma_px", iv(r.range_compression_sigma_px)},
+          {"edge_gain", iv(r.edge_gain)},
+          {"edge_radius_px", iv(r.edge_radius_px)},
+          {"window_min_width", iv(r.window_min_width)},
+          {"gamma", iv(r.gamma)},
+          {"bits", r.bits},
+          {"shutter_weights",
+           {{"none", r.weight_none},
+            {"rectangular", r.weight_rectangular},
+            {"octagonal", r.weight_octagonal},
+            {"circular", r.weight_circular}}},
+          {"shutter_half_size", iv(r.shutter_half_size)},
+          {"shutter_corner_cut", iv(r.shutter_corner_cut)},
+          {"shutter_radius", iv(r.shutter_radius)},
+          {"shutter_center", iv(r.shutter_center)},
+          {"shutter_penumbra_px", iv(r.shutter_penumbra_px)},
+          {"shutter_frame_level", iv(r.shutter_frame_level)}};
+}
+
 }  // namespace gimm
