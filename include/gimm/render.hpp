@@ -1,10 +1,16 @@
 #pragma once
 /// The render room: ray-volume traversal (exact Siddon/Jacobs, trilinear), empty-space skipping,
-/// axial pads, the DRR renderer and the prepared view renderer. The Embree vessel-mesh projector
-/// (render/vessel_mesh_projector.hpp, target gimm::embree) is included on its own.
+/// axial pads, the DRR renderer, the prepared view renderer, and image formation (iodine,
+/// collimator shutters, the acquisition and processing chain). The Embree vessel-mesh projector
+/// (render/vessel_mesh_projector.hpp, target gimm::embree) is included on its own; the image
+/// formation's JSON record (render/angiogram_formation_json.hpp) is in the io umbrella.
+#include "gimm/render/angiogram_formation.hpp"
 #include "gimm/render/axial_pad.hpp"
+#include "gimm/render/collimator.hpp"
 #include "gimm/render/drr.hpp"
 #include "gimm/render/empty_space.hpp"
+#include "gimm/render/image_degradation.hpp"
+#include "gimm/render/iodine.hpp"
 #include "gimm/render/padded_attenuation.hpp"
 #include "gimm/render/ray_volume.hpp"
 #include "gimm/render/siddon.hpp"

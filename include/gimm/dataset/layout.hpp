@@ -8,6 +8,8 @@
 ///   patients/<id>/views/<view>.mask.png              8-bit projected vessel mask (0/255)
 ///   patients/<id>/views/<view>.overlap.png           vessel passages per pixel (mesh mode)
 ///   patients/<id>/views/<view>.npy                   float32 line integrals (--line-integrals)
+///   patients/<id>/views/<view>.formed.png            8/16-bit formed angiogram (--formation)
+///   patients/<id>/views/<view>.field.png             8-bit exposed field (0/255; --formation)
 ///   patients/<id>/views/<view>.camera.json           camera, view class, angles, PNG window
 ///   patients/<id>/views/<view>.points.json           projected centerline points
 ///   patients/<id>/pairs/<pair>.json                  pair labels (dense, sparse, F, classes)
@@ -91,8 +93,8 @@ class DatasetLayout {
     return patient_dir(patient) / "timings.json";
   }
 
-  /// A view's files: its stem plus ".png", ".mask.png", ".overlap.png", ".npy", ".camera.json",
-  /// ".points.json".
+  /// A view's files: its stem plus ".png", ".mask.png", ".overlap.png", ".npy", ".formed.png",
+  /// ".field.png", ".camera.json", ".points.json".
   std::filesystem::path view_stem(const std::string& patient, const std::string& view) const {
     return views_dir(patient) / view;
   }
@@ -108,6 +110,12 @@ class DatasetLayout {
   std::filesystem::path view_line_integrals(const std::string& patient,
                                             const std::string& view) const {
     return with_suffix(patient, view, ".npy");
+  }
+  std::filesystem::path view_formed(const std::string& patient, const std::string& view) const {
+    return with_suffix(patient, view, ".formed.png");
+  }
+  std::filesystem::path view_field(const std::string& patient, const std::string& view) const {
+    return with_suffix(patient, view, ".field.png");
   }
   std::filesystem::path view_camera(const std::string& patient, const std::string& view) const {
     return with_suffix(patient, view, ".camera.json");

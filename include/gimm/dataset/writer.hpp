@@ -4,6 +4,7 @@
 /// killed run leaves only temporaries, which the run removes (run.hpp). A patient is written
 /// into its staging folder (a writer over DatasetLayout::with_patient_suffix); the manifest and
 /// split lists of a run are staged together (stage_run_files) and renamed into place at once.
+#include <algorithm>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -98,8 +99,13 @@ struct ViewFiles {
   Image<std::uint8_t> mask;                      ///< nonzero = vessel (written 0/255)
   const Image<std::uint8_t>* overlap = nullptr;  ///< vessel passages per pixel (mesh mode)
   const Image<float>* line_integrals = nullptr;  ///< float32 optical depth (optional)
-  nlohmann::json camera;                         ///< camera, view class, angles
-  nlohmann::json points;                         ///< view_points_json
+  /// The formed angiogram (render/angiogram_formation.hpp), levels of `formed_bits` bits, and
+  /// its exposed field (nonzero = exposed, written 0/255); optional, both or neither.
+  const Image<std::uint16_t>* formed = nullptr;
+  int formed_bits = 8;
+  const Image<std::uint8_t>* field = nullptr;
+  nlohmann::json camera;  ///< camera, view class, angles
+  nlohmann::json points;  ///< view_points_json
 };
 
 class DatasetWriter {
@@ -121,6 +127,22 @@ class DatasetWriter {
     if (files.overlap) write_png(layout_.view_overlap(patient, view), *files.overlap);
     if (files.line_integrals)
       write_npy(layout_.view_line_integrals(patient, view), *files.line_integrals);
+    if (files.formed) {
+      GIMM_CHECK(files.field, "write_view: a formed angiogram needs its field mask");
+      if (files.formed_bits == 16) {
+        write_png(layout_.view_formed(patient, view), *files.formed);
+      } else {
+        GIMM_CHECK(files.formed_bits == 8,
+                   "write_view: formed angiograms are 8 or 16 bits, got " << files.formed_bits);
+        Image<std::uint8_t> levels(files.formed->rows(), files.formed->cols());
+        for (std::size_t p = 0; p < levels.size(); ++p)
+          levels.data()[p] = static_cast<std::uint8_t>(std::min<int>(files.formed->data()[p], 255));
+        write_png(layout_.view_formed(patient, view), levels);
+      }
+      Image<std::uint8_t> field = *files.field;
+      for (auto& px : field.storage()) px = px ? 255 : 0;
+      write_png(layout_.view_field(patient, view), field);
+    }
     write_json_file(layout_.view_camera(patient, view), files.camera);
     write_json_file(layout_.view_points(patient, view), files.points, -1);
   }

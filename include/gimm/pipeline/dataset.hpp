@@ -39,6 +39,8 @@
 #include "gimm/labels/correspondence.hpp"
 #include "gimm/labels/protocol.hpp"
 #include "gimm/labels/view_list.hpp"
+#include "gimm/render/angiogram_formation.hpp"
+#include "gimm/render/angiogram_formation_json.hpp"
 #include "gimm/render/vessel_mesh_projector.hpp"
 #include "gimm/render/view_renderer.hpp"
 #include "gimm/version.hpp"
@@ -59,6 +61,11 @@ struct DatasetOptions {
   VesselMode vessel_mode = VesselMode::voxel;
   std::size_t sparse_count = 20;
   bool write_line_integrals = false;  ///< also each view's float32 line integrals (<view>.npy)
+  /// Also each view as a C-arm forms it (render/angiogram_formation.hpp), a named stage after
+  /// the render: <view>.formed.png and <view>.field.png, the drawn parameters in camera.json
+  /// "formation". Every other file is the same as without it.
+  bool form_angiogram = false;
+  AngiogramFormationRanges formation_ranges;    ///< what form_angiogram draws each view from
   double split_train = 0.70, split_val = 0.15;  ///< the rest is test
   double min_spur_mm = 3.0;
   /// A label with one tree only: make the system it is assigned to (split_coronary_systems'
@@ -94,6 +101,9 @@ struct DatasetOptions {
                         {"allow_single_system", allow_single_system},
                         {"gimm_version", GIMM_VERSION_STRING}};
     if (!listed_views.empty()) j["views"] = view_list_to_json(listed_views);
+    // Only when on: runs without it keep their records (and resume) byte for byte.
+    if (form_angiogram)
+      j["formation"] = {{"stage", "angiogram"}, {"ranges", gimm::to_json(formation_ranges)}};
     return j;
   }
 };
@@ -381,6 +391,32 @@ inline nlohmann::json intensity_window_json(const IntensityWindow& w) {
           {"intensity", "Beer-Lambert exp(-line integral), I0 = 1"}};
 }
 
+/// The image-formation stage of a system's views: the ranges each view's formation is drawn
+/// from, and the system's stream (view v draws from stream.fork(v): the views' formations are
+/// independent of each other and of every other random choice of the patient).
+struct ViewFormationStage {
+  AngiogramFormationRanges ranges;
+  Rng stream;
+};
+
+/// The formation stage of one view: its drawn parameters go to the camera record `cj`, the
+/// formed image and field mask are returned.
+inline FormedAngiogram form_view(const RenderedView& view, const CArm& carm,
+                                 const ViewFormationStage& stage, std::size_t v,
+                                 nlohmann::json& cj) {
+  GIMM_CHECK(stage.ranges.bits == 8 || stage.ranges.bits == 16,
+             "image formation: the dataset writes 8- or 16-bit formed PNGs, got bits "
+                 << stage.ranges.bits);
+  Rng rng = stage.stream.fork(v);
+  const AngiogramFormation f = randomize(stage.ranges, rng);
+  FormedAngiogram formed = form_angiogram(view.line_integrals, carm.pixel_mm, f, rng);
+  cj["formation"] = to_json(f);
+  cj["formation"]["png"] =
+      "formed.png: display = value / (2^bits - 1), bright background, "
+      "dark vessels; field.png: 255 = exposed";
+  return formed;
+}
+
 /// The rendered and labelled views of one system.
 struct SystemViews {
   std::vector<Camerad> cameras;
@@ -396,7 +432,8 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
                                        const CArm& settings, const Eigen::Vector3d& isocenter,
                                        const std::vector<LabelPoint>& points,
                                        const DatasetWriter& writer, const std::string& patient,
-                                       bool write_line_integrals, PatientTimings& t) {
+                                       bool write_line_integrals, PatientTimings& t,
+                                       const ViewFormationStage* formation = nullptr) {
   SystemViews out;
   const bool mesh_mode = renderer.options().vessels == VesselMode::mesh;
   // Declared after everything the task reads, so an exception here waits for it first.
@@ -415,7 +452,7 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
     nlohmann::json cj = view_camera_json(carm, plan.views[v], plan.system);
     collect();
     in_flight = std::async(std::launch::async, [&, view = std::move(view), cj = std::move(cj),
-                                                camera, name]() mutable {
+                                                camera, name, carm, v]() mutable {
       detail::Stopwatch writing;
       auto labels =
           label_view(points, camera, &view.vessel_mask, mesh_mode ? &view.overlap : nullptr);
@@ -424,11 +461,18 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
       IntensityWindow window;
       Image<std::uint16_t> image = to_uint16_min_max(view.intensity(), &window);
       cj["intensity_window"] = intensity_window_json(window);
-      writer.write_view(
-          patient, name,
-          {std::move(image), std::move(view.vessel_mask), mesh_mode ? &view.overlap : nullptr,
-           write_line_integrals ? &view.line_integrals : nullptr, std::move(cj),
-           view_points_json(points, labels)});
+      FormedAngiogram formed;
+      if (formation) formed = form_view(view, carm, *formation, v, cj);
+      ViewFiles files{std::move(image),
+                      std::move(view.vessel_mask),
+                      mesh_mode ? &view.overlap : nullptr,
+                      write_line_integrals ? &view.line_integrals : nullptr,
+                      formation ? &formed.quantised : nullptr,
+                      formation ? formation->ranges.bits : 8,
+                      formation ? &formed.field_mask : nullptr,
+                      std::move(cj),
+                      view_points_json(points, labels)};
+      writer.write_view(patient, name, std::move(files));
       t.writes += writing.lap();
       return labels;
     });
@@ -553,9 +597,14 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     const ViewRenderer renderer =
         system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr);
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
-    const SystemViews views =
-        render_system_views(renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id),
-                            points, writer, src.id, o.write_line_integrals, t);
+    std::optional<ViewFormationStage> formation;
+    if (o.form_angiogram)
+      formation = ViewFormationStage{
+          o.formation_ranges,
+          patient_stream(o, src.id, std::string("formation:") + to_string(system))};
+    const SystemViews views = render_system_views(
+        renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id), points, writer, src.id,
+        o.write_line_integrals, t, formation ? &*formation : nullptr);
     t.views += stage.lap();
     t.view_count += plan.views.size();
     const std::size_t dense_total = label_system_pairs(plan, views, points, o, writer, src.id, t);

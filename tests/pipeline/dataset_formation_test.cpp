@@ -1,0 +1,135 @@
+// The dataset job's image-formation stage (DatasetOptions::form_angiogram, --formation): it adds
+// <view>.formed.png, <view>.field.png and camera.json "formation", and changes nothing else -
+// the angiogram PNG, masks, points and pair labels are byte for byte those of a run without it.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+
+#include "gimm/io/files.hpp"
+#include "gimm/io/png.hpp"
+#include "gimm/pipeline/dataset.hpp"
+
+namespace fs = std::filesystem;
+using namespace gimm;
+using nlohmann::json;
+
+namespace {
+
+fs::path fresh_out(const std::string& name) {
+  const fs::path out = fs::path(GIMM_TEST_TMP) / "pipeline" / "formation" / name;
+  fs::remove_all(out);
+  return out;
+}
+
+/// Every file under `dir`, by its path relative to `dir`, with its bytes.
+std::map<std::string, std::vector<unsigned char>> files_under(const fs::path& dir) {
+  std::map<std::string, std::vector<unsigned char>> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file())
+      out[fs::relative(e.path(), dir).generic_string()] = read_file_bytes(e.path());
+  return out;
+}
+
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("Formation stage: new files only, labels and the old image unchanged",
+          "[pipeline][formation]") {
+  DatasetOptions o;
+  o.carm.rows = o.carm.cols = 96;
+  o.carm.pixel_mm = 2.5;
+  o.seed = 5;
+  PatientSource src;
+  src.id = "phantom-0000";
+  src.phantom_seed = 11;
+
+  const fs::path plain_out = fresh_out("plain"), formed_out = fresh_out("formed"),
+                 again_out = fresh_out("again");
+  generate_patient(src, o, plain_out);
+  DatasetOptions with = o;
+  with.form_angiogram = true;
+  generate_patient(src, with, formed_out);
+  generate_patient(src, with, again_out);
+
+  const DatasetLayout plain_layout(plain_out), formed_layout(formed_out);
+  const auto plain = files_under(plain_layout.patient_dir(src.id));
+  const auto formed = files_under(formed_layout.patient_dir(src.id));
+  REQUIRE(plain.size() > 10);
+
+  int views = 0;
+  for (const auto& [name, bytes] : plain) {
+    INFO(name);
+    REQUIRE(formed.count(name) == 1);
+    if (name == "timings.json") continue;  // wall-clock seconds
+    if (ends_with(name, ".camera.json") || name == "done.json") {
+      json a = json::parse(bytes.begin(), bytes.end());
+      json b = json::parse(formed.at(name).begin(), formed.at(name).end());
+      if (name == "done.json") {
+        CHECK(b["run"]["parameters"].contains("formation"));
+        CHECK_FALSE(a["run"]["parameters"].contains("formation"));
+        b["run"]["parameters"].erase("formation");
+      } else {
+        ++views;
+        REQUIRE(b.contains("formation"));
+        const AngiogramFormation f = angiogram_formation_from_json(
+            [&] {
+              json r = b["formation"];
+              r.erase("png");
+              return r;
+            }(),
+            name);
+        CHECK(f.scatter_to_primary >= 0.3);
+        b.erase("formation");
+      }
+      CHECK(a == b);
+    } else {
+      CHECK(bytes == formed.at(name));  // images, masks, points, pair labels, centerlines
+    }
+  }
+  REQUIRE(views > 0);
+  // The new files: a formed image and a field mask per view, nothing else.
+  std::set<std::string> extra;
+  for (const auto& [name, bytes] : formed)
+    if (!plain.count(name)) extra.insert(name);
+  CHECK(extra.size() == 2 * static_cast<std::size_t>(views));
+  for (const auto& name : extra)
+    CHECK((ends_with(name, ".formed.png") || ends_with(name, ".field.png")));
+
+  // A formed view: 8-bit, vessels darker than the exposed background; the field covers
+  // the vessels' centre of the image.
+  int compared = 0;
+  for (const auto& name : extra) {
+    if (!ends_with(name, ".formed.png")) continue;
+    const std::string stem = name.substr(0, name.size() - std::string(".formed.png").size());
+    const fs::path dir = formed_layout.patient_dir(src.id);
+    const auto decoded = detail::read_png_any(dir / name);
+    CHECK(decoded.bit_depth == 8);
+    const Image<std::uint8_t> image = read_png8(dir / name);
+    const Image<std::uint8_t> mask = read_png8(dir / (stem + ".mask.png"));
+    const Image<std::uint8_t> field = read_png8(dir / (stem + ".field.png"));
+    double vessel = 0, background = 0;
+    int nv = 0, nb = 0;
+    for (std::size_t p = 0; p < image.size(); ++p) {
+      if (!field.data()[p]) continue;
+      (mask.data()[p] ? vessel : background) += image.data()[p];
+      ++(mask.data()[p] ? nv : nb);
+    }
+    INFO(name << ": vessel mean " << vessel / std::max(nv, 1) << ", background mean "
+              << background / std::max(nb, 1));
+    if (nv > 0 && nb > 0) {
+      CHECK(vessel / nv < background / nb);
+      ++compared;
+    }
+  }
+  CHECK(compared > 0);
+  // The same seed, the same formed bytes.
+  CHECK(files_under(formed_layout.patient_dir(src.id)).size() ==
+        files_under(DatasetLayout(again_out).patient_dir(src.id)).size());
+  const auto again = files_under(DatasetLayout(again_out).patient_dir(src.id));
+  for (const auto& name : extra) CHECK(again.at(name) == formed.at(name));
+}
