@@ -64,9 +64,10 @@ int main(int argc, char** argv) {
   app.add_flag("--line-integrals", options.write_line_integrals,
                "also write each view's float32 line integrals (<view>.npy, (rows, cols))");
   app.add_flag("--formation", options.form_angiogram,
-               "also form each view as a C-arm does (scatter, blur, noise, shutters, log, "
-               "window, edge enhancement; parameters drawn per view, docs/realism.md): "
-               "<view>.formed.png (8-bit) and <view>.field.png; every other file unchanged");
+               "also form each view as a C-arm does (iodine lumen, scatter, blur, noise, "
+               "shutters, log, window, edge enhancement; parameters drawn per view, "
+               "docs/realism.md): <view>.formed.png (8-bit) and <view>.field.png; the lumen is "
+               "iodine in <view>.png too; masks and labels unchanged");
   app.add_flag("--allow-single-system", options.allow_single_system,
                "a label of one tree: make that system only (assigned by the volume centre), "
                "record the other as absent");

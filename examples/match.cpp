@@ -11,7 +11,7 @@
 //              [--max-points N]
 //   gimm-match --method geometric --camera-a A.json --camera-b B.json --image-a A.png
 //              --image-b B.png [--tree tree.json] [--tree-vtk tree.vtk] [--tolerance PX]
-//   gimm-match --dataset DIR --method geometric [--segment] --out PRED_DIR
+//   gimm-match --dataset DIR --method geometric [--segment] [--images formed] --out PRED_DIR
 //   gimm-match --dicom-a A.dcm --dicom-b B.dcm [--frame-a N --frame-b M] [--method geometric]
 //              [--system LCA|RCA] [--pixel-a/-b MM] [--table-a/-b L V G] [--isocenter-a/-b X Y Z]
 //              [--camera-a/-b C.json] [--out m.json] [--picture p.png] [--tree t.json]
@@ -75,7 +75,7 @@ struct MatchedCounts {
 
 /// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line.
 MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
-                          const std::vector<std::string>& ids, bool use_cameras,
+                          const std::vector<std::string>& ids, bool use_cameras, bool formed,
                           const std::filesystem::path& pred_dir,
                           const gimm::CameraError& camera_error,
                           const gimm::ImageDegradation& degradation, std::uint64_t seed) {
@@ -91,9 +91,19 @@ MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader&
     input.class_b = truth.view_class_b;
     input.truth = &truth;
     gimm::Image<float> a, b;
+    gimm::Image<std::uint8_t> field_a, field_b;
+    if (formed) {  // the views as a C-arm forms them, matched inside their exposed fields
+      field_a = gimm::read_png8(layout.view_field(patient, truth.view_a));
+      field_b = gimm::read_png8(layout.view_field(patient, truth.view_b));
+      input.field_a = &field_a;
+      input.field_b = &field_b;
+    }
     if (matcher.needs_images()) {
-      a = gimm::read_png_unit(layout.view_image(patient, truth.view_a));
-      b = gimm::read_png_unit(layout.view_image(patient, truth.view_b));
+      const auto image = [&](const std::string& view) {
+        return formed ? layout.view_formed(patient, view) : layout.view_image(patient, view);
+      };
+      a = gimm::read_png_unit(image(truth.view_a));
+      b = gimm::read_png_unit(image(truth.view_b));
       if (!degradation.none()) {  // what the matcher sees is degraded, the truth is not
         gimm::Rng rng = gimm::baseline_stream(seed, "image-degradation", ids[n]);
         a = gimm::degrade_image(a, degradation, rng);
@@ -129,7 +139,7 @@ MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader&
 /// fewest matches the matcher estimates its gating F from (learned, --geometry matches, a
 /// gate), else 0.
 int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, int estimate_from,
+                  const std::string& split, bool use_cameras, bool formed, int estimate_from,
                   const std::string& out, const gimm::CameraError& camera_error,
                   const gimm::ImageDegradation& degradation, std::uint64_t seed) {
   gimm::DatasetReader reader(dataset);
@@ -140,8 +150,8 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
   // (a full disk) leaves `out` as it was.
   try {
     gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
-      counts =
-          match_pairs(matcher, reader, ids, use_cameras, staged, camera_error, degradation, seed);
+      counts = match_pairs(matcher, reader, ids, use_cameras, formed, staged, camera_error,
+                           degradation, seed);
     });
   } catch (...) {
     std::fprintf(stderr, "\n");  // the progress line ends before the error is printed
@@ -187,6 +197,12 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--split", split, "dataset mode: all|train|val|test")
       ->check(CLI::IsMember({"all", "train", "val", "test"}))
+      ->capture_default_str();
+  std::string images = "rendered";
+  app.add_option("--images", images,
+                 "dataset mode: rendered (<view>.png) | formed (<view>.formed.png as a C-arm "
+                 "forms it, matched inside <view>.field.png; gimm-dataset --formation)")
+      ->check(CLI::IsMember({"rendered", "formed"}))
       ->capture_default_str();
   app.add_option("--geometry", geometry, "dataset mode: F from the view cameras or the matches")
       ->check(CLI::IsMember({"cameras", "matches"}))
@@ -396,13 +412,13 @@ int main(int argc, char** argv) {
                      << method << " does not look at them");
       const bool estimates_F =
           method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
-      return match_dataset(*matcher, dataset, split, geometry == "cameras",
+      return match_dataset(*matcher, dataset, split, geometry == "cameras", images == "formed",
                            estimates_F ? options.gate.min_matches : 0, out, camera_error,
                            degradation, seed);
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
     for (const char* flag :
-         {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px"})
+         {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px", "--images"})
       GIMM_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
     for (const auto& [flag, frame] : {std::pair{"--frame-a", frame_a}, {"--frame-b", frame_b}})
       GIMM_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);

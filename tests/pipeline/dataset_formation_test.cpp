@@ -1,6 +1,7 @@
 // The dataset job's image-formation stage (DatasetOptions::form_angiogram, --formation): it adds
-// <view>.formed.png, <view>.field.png and camera.json "formation", and changes nothing else -
-// the angiogram PNG, masks, points and pair labels are byte for byte those of a run without it.
+// <view>.formed.png, <view>.field.png and camera.json "formation", makes the lumen iodine (so the
+// angiogram PNG and its window change), and nothing else: masks, points and pair labels are byte
+// for byte those of a run without it.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <map>
@@ -38,7 +39,7 @@ bool ends_with(const std::string& s, const std::string& tail) {
 
 }  // namespace
 
-TEST_CASE("Formation stage: new files only, labels and the old image unchanged",
+TEST_CASE("Formation stage: new files and an iodine lumen, labels unchanged",
           "[pipeline][formation]") {
   DatasetOptions o;
   o.carm.rows = o.carm.cols = 96;
@@ -80,15 +81,33 @@ TEST_CASE("Formation stage: new files only, labels and the old image unchanged",
             [&] {
               json r = b["formation"];
               r.erase("png");
+              r.erase("iodine");
               return r;
             }(),
             name);
         CHECK(f.scatter_to_primary >= 0.3);
+        // The system's injection, drawn from the iodine ranges: a lumen far denser than the
+        // recipe's fixed 3000 HU (about 0.2 / mm against blood's 0.02 / mm).
+        const IodineContrast iodine = iodine_contrast_from_json(
+            [&] {
+              json r = b["formation"]["iodine"];
+              r.erase("lumen_hu");
+              return r;
+            }(),
+            name);
+        CHECK(iodine.iodine_mg_per_ml >= with.iodine_ranges.iodine_mg_per_ml.lo);
+        CHECK(iodine.iodine_mg_per_ml <= with.iodine_ranges.iodine_mg_per_ml.hi);
+        CHECK(b["formation"]["iodine"]["lumen_hu"].get<double>() == Approx(iodine.lumen_hu()));
+        CHECK(iodine.lumen_hu() > 5000);
         b.erase("formation");
+        a.erase("intensity_window");  // the lumen is denser: the image's range moved
+        b.erase("intensity_window");
       }
       CHECK(a == b);
+    } else if (ends_with(name, ".png") && !ends_with(name, ".mask.png")) {
+      CHECK(bytes != formed.at(name));  // the angiogram: an iodine lumen now
     } else {
-      CHECK(bytes == formed.at(name));  // images, masks, points, pair labels, centerlines
+      CHECK(bytes == formed.at(name));  // masks, points, pair labels, centerlines
     }
   }
   REQUIRE(views > 0);

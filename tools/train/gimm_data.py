@@ -78,15 +78,18 @@ def resize_for_network(image, size):
 class PairSample:
     """One view pair at network resolution: images, masks, classes and dense labels."""
 
-    def __init__(self, path, size, view_cache):
+    def __init__(self, path, size, view_cache, images="rendered"):
         with open(path) as f:
             pair = json.load(f)
         cols = dense_columns(pair, path)
         views = os.path.join(os.path.dirname(os.path.dirname(path)), "views")
         self.path = path
         self.class_a, self.class_b = int(pair["view_class_a"]), int(pair["view_class_b"])
-        self.image_a, self.mask_a, su, sv = self._view(views, pair["view_a"], size, view_cache)
-        self.image_b, self.mask_b, _, _ = self._view(views, pair["view_b"], size, view_cache)
+        suffix = IMAGE_SUFFIXES[images]
+        self.image_a, self.mask_a, su, sv = self._view(views, pair["view_a"], size, view_cache,
+                                                       suffix)
+        self.image_b, self.mask_b, _, _ = self._view(views, pair["view_b"], size, view_cache,
+                                                     suffix)
         self.scale = (su, sv)  # image pixels per network pixel
         net = lambda u, s: (u + 0.5) / s - 0.5  # noqa: E731
         self.a = np.stack([net(cols["u_a"], su), net(cols["v_a"], sv)], 1).astype(np.float32)
@@ -96,23 +99,34 @@ class PairSample:
         self.world = np.stack([cols["x_mm"], cols["y_mm"], cols["z_mm"]], 1)
 
     @staticmethod
-    def _view(views, name, size, cache):
+    def _view(views, name, size, cache, suffix=".png"):
         key = (views, name)
         if key not in cache:
-            image = read_png_unit(os.path.join(views, name + ".png"))
+            path = os.path.join(views, name + suffix)
+            if not os.path.isfile(path):
+                raise DatasetError(f"{path}: no such image (formed images need gimm-dataset "
+                                   "--formation)" if suffix != ".png" else f"{path}: no such image")
+            image = read_png_unit(path)
             mask = np.asarray(Image.open(os.path.join(views, name + ".mask.png"))) > 0
             net, su, sv = resize_for_network(image, size)
             cache[key] = (net.half(), mask, su, sv)  # half: 1000s of views stay in memory
         return cache[key]
 
 
-def load_pairs(root, split, size, limit=None, progress=True):
+# Which image of a view the network sees: the render (<view>.png) or the view as a C-arm forms
+# it (<view>.formed.png: iodine, scatter, noise, blur, processing, shutters; --formation).
+IMAGE_SUFFIXES = {"rendered": ".png", "formed": ".formed.png"}
+
+
+def load_pairs(root, split, size, limit=None, progress=True, images="rendered"):
+    if images not in IMAGE_SUFFIXES:
+        raise DatasetError(f"images must be one of {sorted(IMAGE_SUFFIXES)}, got {images!r}")
     files = pair_files(root, read_split(root, split))
     if limit:
         files = files[:limit]
     cache, out = {}, []
     for n, path in enumerate(files):
-        out.append(PairSample(path, size, cache))
+        out.append(PairSample(path, size, cache, images))
         if progress and (n + 1) % 500 == 0:
             print(f"data: {split} {n + 1}/{len(files)} pairs", flush=True)
     return out

@@ -51,6 +51,9 @@ def parse_args(argv=None):
     p.add_argument("--clip", type=float, default=1.0, help="gradient norm clipping")
     p.add_argument("--batch", type=int, default=4, help="pairs per step per rank")
     p.add_argument("--size", type=int, default=128, help="network input: longer side, pixels")
+    p.add_argument("--images", default="rendered", choices=["rendered", "formed"],
+                   help="train on the renders (<view>.png) or the views as a C-arm forms them "
+                        "(<view>.formed.png, gimm-dataset --formation)")
     p.add_argument("--widths", type=int, nargs=3, default=[16, 32, 64])
     p.add_argument("--coarse-layers", nargs="+", default=["self", "cross"])
     p.add_argument("--fine-layers", nargs="+", default=["self", "cross"])
@@ -357,8 +360,10 @@ def main(argv=None):
     # The stream restarts from (seed, rank, step) on --resume: deterministic, not a replay.
     stream = rendered_stream(args, rank, state["step"] if state else 0) if args.rendered else None
     train = [next(stream)] if stream else \
-        load_pairs(args.dataset, "train", args.size, args.train_limit or None, rank == 0)
-    val = load_pairs(args.dataset, "val", args.size, args.val_pairs or None, rank == 0) \
+        load_pairs(args.dataset, "train", args.size, args.train_limit or None, rank == 0,
+                   args.images)
+    val = load_pairs(args.dataset, "val", args.size, args.val_pairs or None, rank == 0,
+                     args.images) \
         if rank == 0 else []
     hc, wc = (train[0].image_a.shape[0] + 7) // 8, (train[0].image_a.shape[1] + 7) // 8
     truths = {id(s): PairTruth(s.a, s.b, hc, wc) for s in train}

@@ -65,7 +65,11 @@ struct DatasetOptions {
   /// the render: <view>.formed.png and <view>.field.png, the drawn parameters in camera.json
   /// "formation". Every other file is the same as without it.
   bool form_angiogram = false;
-  AngiogramFormationRanges formation_ranges;    ///< what form_angiogram draws each view from
+  AngiogramFormationRanges formation_ranges;  ///< what form_angiogram draws each view from
+  /// With form_angiogram, the injected lumen is iodine (render/iodine.hpp) instead of the
+  /// recipe's fixed lumen_hu: one contrast drawn per patient and system from these ranges, so
+  /// vessel contrast follows from the concentration and the beam's energy.
+  IodineContrastRanges iodine_ranges;
   double split_train = 0.70, split_val = 0.15;  ///< the rest is test
   double min_spur_mm = 3.0;
   /// A label with one tree only: make the system it is assigned to (split_coronary_systems'
@@ -103,7 +107,13 @@ struct DatasetOptions {
     if (!listed_views.empty()) j["views"] = view_list_to_json(listed_views);
     // Only when on: runs without it keep their records (and resume) byte for byte.
     if (form_angiogram)
-      j["formation"] = {{"stage", "angiogram"}, {"ranges", gimm::to_json(formation_ranges)}};
+      j["formation"] = {
+          {"stage", "angiogram"},
+          {"ranges", gimm::to_json(formation_ranges)},
+          {"iodine_ranges",
+           {{"iodine_mg_per_ml",
+             {iodine_ranges.iodine_mg_per_ml.lo, iodine_ranges.iodine_mg_per_ml.hi}},
+            {"effective_kev", {iodine_ranges.effective_kev.lo, iodine_ranges.effective_kev.hi}}}}};
     return j;
   }
 };
@@ -361,11 +371,15 @@ inline PatientVolumes read_patient(const PatientSource& src) {
 
 /// The renderer of one system's views: its injection (voxel mode) or its vessel surface (mesh
 /// mode) over the patient's attenuation, with the patient's dense-tissue classes.
+/// `iodine`: the injection's contrast when the lumen is iodine (form_angiogram), else the
+/// recipe's fixed lumen_hu.
 inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::uint8_t>& mask,
                                     const DatasetOptions& o, const std::string& patient,
-                                    const DenseTissue* dense) {
+                                    const DenseTissue* dense,
+                                    const IodineContrast* iodine = nullptr) {
   RendererOptions ro;
   ro.recipe.preset = o.preset;
+  if (iodine) ro.recipe.lumen_hu = iodine->lumen_hu();
   ro.pad_mm = o.pad_mm;
   ro.projector = o.projector;
   ro.vessels = o.vessel_mode;
@@ -397,6 +411,7 @@ inline nlohmann::json intensity_window_json(const IntensityWindow& w) {
 struct ViewFormationStage {
   AngiogramFormationRanges ranges;
   Rng stream;
+  IodineContrast iodine;  ///< the system's injection, recorded with each view
 };
 
 /// The formation stage of one view: its drawn parameters go to the camera record `cj`, the
@@ -411,6 +426,8 @@ inline FormedAngiogram form_view(const RenderedView& view, const CArm& carm,
   const AngiogramFormation f = randomize(stage.ranges, rng);
   FormedAngiogram formed = form_angiogram(view.line_integrals, carm.pixel_mm, f, rng);
   cj["formation"] = to_json(f);
+  cj["formation"]["iodine"] = to_json(stage.iodine);
+  cj["formation"]["iodine"]["lumen_hu"] = stage.iodine.lumen_hu();
   cj["formation"]["png"] =
       "formed.png: display = value / (2^bits - 1), bright background, "
       "dark vessels; field.png: 255 = exposed";
@@ -594,14 +611,19 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       record["systems"][to_string(system)] = system_record(voxels, plan, tree.length(), 0);
       continue;
     }
-    const ViewRenderer renderer =
-        system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr);
+    std::optional<IodineContrast> iodine;
+    if (o.form_angiogram) {
+      Rng rng = patient_stream(o, src.id, std::string("iodine:") + to_string(system));
+      iodine = randomize(o.iodine_ranges, rng);
+    }
+    const ViewRenderer renderer = system_renderer(
+        patient.hu, mask, o, src.id, dense ? &*dense : nullptr, iodine ? &*iodine : nullptr);
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
     std::optional<ViewFormationStage> formation;
     if (o.form_angiogram)
       formation = ViewFormationStage{
           o.formation_ranges,
-          patient_stream(o, src.id, std::string("formation:") + to_string(system))};
+          patient_stream(o, src.id, std::string("formation:") + to_string(system)), *iodine};
     const SystemViews views = render_system_views(
         renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id), points, writer, src.id,
         o.write_line_integrals, t, formation ? &*formation : nullptr);
