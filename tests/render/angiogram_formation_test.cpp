@@ -96,6 +96,8 @@ AngiogramFormation bare() {
   f.window_width = 1.0;
   f.bits = 0;
   f.shutter.shape = ShutterShape::none;
+  f.display_black = 0;
+  f.display_white = 1;
   return f;
 }
 
@@ -224,8 +226,28 @@ TEST_CASE("A 3 mm vessel in a water slab looks as in clinical frames at the defa
   AngiogramFormation quiet = defaults;
   quiet.detector_photons = 0;
   Rng rng(7);
-  const Measured clean = measure(form_angiogram(scene, kPixelMm, quiet, rng).display);
-  const Measured noisy = measure(form_angiogram(scene, kPixelMm, defaults, rng).display);
+  // Measured in the display's own range, as a per-frame normalisation of a real frame sees it
+  // (real frames span about 0.2-0.8 raw; the display levels put the DRR there).
+  const double range = defaults.display_white - defaults.display_black;
+  const auto in_range = [&](Measured m) {
+    m.contrast /= range;
+    m.noise /= range;
+    return m;
+  };
+  const FormedAngiogram quiet_out = form_angiogram(scene, kPixelMm, quiet, rng);
+  const Measured clean = in_range(measure(quiet_out.display));
+  const Measured noisy = in_range(measure(form_angiogram(scene, kPixelMm, defaults, rng).display));
+  // The display levels: inside the field nothing brighter than white or darker than black
+  // (to the 8-bit step).
+  double lo = 1, hi = 0;
+  for (std::size_t p = 0; p < quiet_out.display.size(); ++p)
+    if (quiet_out.field_mask.data()[p]) {
+      lo = std::min(lo, double(quiet_out.display.data()[p]));
+      hi = std::max(hi, double(quiet_out.display.data()[p]));
+    }
+  CHECK(lo >= defaults.display_black - 0.5 / 255);
+  CHECK(hi <= defaults.display_white + 0.5 / 255);
+  CHECK(hi - lo > 0.5 * (defaults.display_white - defaults.display_black));
   WARN("defaults: contrast without noise " << clean.contrast << "; with noise contrast "
                                            << noisy.contrast << ", noise sigma " << noisy.noise
                                            << ", CNR " << noisy.cnr);
@@ -447,8 +469,9 @@ TEST_CASE("Randomised formations stay inside their ranges and mostly the clinica
     // The measurement needs the vessel and the noise patch inside the field.
     f.shutter.shape = ShutterShape::none;
     Rng noise = rng.fork(static_cast<std::uint64_t>(k));
-    const Measured m =
-        measure(form_angiogram(slab_with_vessel(contrast), kPixelMm, f, noise).display);
+    Measured m = measure(form_angiogram(slab_with_vessel(contrast), kPixelMm, f, noise).display);
+    m.contrast /= f.display_white - f.display_black;  // in the display's range, as above
+    m.noise /= f.display_white - f.display_black;
     lowest_contrast = std::min(lowest_contrast, m.contrast);
     highest_contrast = std::max(highest_contrast, m.contrast);
     lowest_cnr = std::min(lowest_cnr, m.cnr);

@@ -23,6 +23,8 @@
 ///                                                     field, hi - lo at least min_width; or a
 ///                                                     fixed width below the hi percentile)
 ///   gamma       v = v^gamma
+///   display     v = black + (white - black) v       (the monitor's levels: real cine frames
+///                                                     span about 0.2-0.8, not 0-1)
 ///   shutter     v = e v + (1 - e) frame_level        (render/collimator.hpp)
 ///   quantise    v = round(v (2^bits - 1)) / (2^bits - 1)
 /// Display convention as gimm's images: [0, 1], bright background, dark vessels.
@@ -96,8 +98,12 @@ struct AngiogramFormation {
   double window_min_width = 0.8;
   double window_width = 1.0;  ///< fixed window: width in log units, [0.05, 10]
   double gamma = 1.0;         ///< display gamma, v^gamma, [0.3, 3]
-  int bits = 8;               ///< 8 or 16: quantise; 0: keep floats
-  Shutter shutter;            ///< render/collimator.hpp
+  /// Display levels the window maps to: black (the darkest vessel) and white (the brightest
+  /// lung), [0, 0.5] and [0.5, 1]. Four clinical frames span 0.28 (1st percentile) to 0.71
+  /// (99th) (docs/realism.md); 0 and 1 stretch a DRR over the whole range.
+  double display_black = 0.2, display_white = 0.78;
+  int bits = 8;     ///< 8 or 16: quantise; 0: keep floats
+  Shutter shutter;  ///< render/collimator.hpp
 
   void validate() const {
     const auto in = [](const char* name, double v, double lo, double hi, const char* unit) {
@@ -123,6 +129,11 @@ struct AngiogramFormation {
     in("window_min_width", window_min_width, 0.05, 10, " log units");
     in("window_width", window_width, 0.05, 10, " log units");
     in("gamma", gamma, 0.3, 3, "");
+    in("display_black", display_black, 0, 0.5, "");
+    in("display_white", display_white, 0.5, 1, "");
+    GIMM_CHECK(display_black < display_white,
+               "angiogram formation: display_black ("
+                   << display_black << ") must be below display_white (" << display_white << ")");
     GIMM_CHECK(bits == 0 || bits == 8 || bits == 16,
                "angiogram formation: bits must be 0 (float), 8 or 16, got " << bits);
     shutter.validate();
@@ -264,7 +275,9 @@ inline FormedAngiogram form_angiogram_from_intensity(const Image<float>& primary
   out.display = Image<float>(rows, cols);
   for (std::size_t p = 0; p < s.size(); ++p) {
     const double v = std::clamp((s.data()[p] - lo) / (hi - lo), 0.0, 1.0);
-    out.display.data()[p] = static_cast<float>(f.gamma == 1 ? v : std::pow(v, f.gamma));
+    const double shown = f.gamma == 1 ? v : std::pow(v, f.gamma);
+    out.display.data()[p] =
+        static_cast<float>(f.display_black + (f.display_white - f.display_black) * shown);
   }
   apply_shutter(out.display, f.shutter);
 
@@ -323,12 +336,16 @@ struct AngiogramFormationRanges {
   /// Shutter shape weights (none, rectangular, octagonal, circular), >= 0, not all 0.
   double weight_none = 0.15, weight_rectangular = 0.5, weight_octagonal = 0.2,
          weight_circular = 0.15;
-  Interval shutter_half_size{0.7, 1.05};  ///< rectangle/octagon, each side drawn on its own
+  /// Rectangle/octagon, each side drawn on its own. Real frames keep 0.90-0.97 of the image
+  /// exposed (four clinical views; GE DL frames: an 8-10 px border at 512 px).
+  Interval shutter_half_size{0.85, 1.05};
   Interval shutter_corner_cut{0.2, 0.5};
-  Interval shutter_radius{0.9, 1.25};
+  Interval shutter_radius{1.0, 1.3};
   Interval shutter_center{-0.04, 0.04};  ///< u and v each
   Interval shutter_penumbra_px{2, 12};
   Interval shutter_frame_level{0.0, 0.12};
+  Interval display_black{0.12, 0.3};
+  Interval display_white{0.65, 0.9};
 
   /// Every interval ordered and inside the parameter's valid range; weights usable.
   void validate() const {
@@ -350,7 +367,9 @@ struct AngiogramFormationRanges {
         {"shutter_radius", shutter_radius},
         {"shutter_center", shutter_center},
         {"shutter_penumbra_px", shutter_penumbra_px},
-        {"shutter_frame_level", shutter_frame_level}};
+        {"shutter_frame_level", shutter_frame_level},
+        {"display_black", display_black},
+        {"display_white", display_white}};
     for (const auto& [name, iv] : all)
       GIMM_CHECK(std::isfinite(iv.lo) && std::isfinite(iv.hi) && iv.lo <= iv.hi,
                  "angiogram formation ranges: " << name << " must be finite with lo <= hi, got ["
@@ -399,6 +418,8 @@ struct AngiogramFormationRanges {
     f.shutter.center_u = f.shutter.center_v = x(shutter_center);
     f.shutter.penumbra_px = x(shutter_penumbra_px);
     f.shutter.frame_level = x(shutter_frame_level);
+    f.display_black = x(display_black);
+    f.display_white = x(display_white);
     return f;
   }
 };
@@ -438,6 +459,8 @@ inline AngiogramFormation randomize(const AngiogramFormationRanges& ranges, Rng&
   f.shutter.center_v = draw(ranges.shutter_center);
   f.shutter.penumbra_px = draw(ranges.shutter_penumbra_px);
   f.shutter.frame_level = draw(ranges.shutter_frame_level);
+  f.display_black = draw(ranges.display_black);  // last: the draws before keep their order
+  f.display_white = draw(ranges.display_white);
   f.validate();
   return f;
 }

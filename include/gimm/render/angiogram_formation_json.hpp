@@ -40,6 +40,8 @@ inline nlohmann::json to_json(const AngiogramFormation& f) {
           {"window_min_width", f.window_min_width},
           {"window_width", f.window_width},
           {"gamma", f.gamma},
+          {"display_black", f.display_black},
+          {"display_white", f.display_white},
           {"bits", f.bits},
           {"shutter", to_json(f.shutter)}};
 }
@@ -105,6 +107,8 @@ inline AngiogramFormation angiogram_formation_from_json(const nlohmann::json& j,
   f.window_min_width = json_number(j, "window_min_width", where);
   f.window_width = json_number(j, "window_width", where);
   f.gamma = json_number(j, "gamma", where);
+  f.display_black = json_number(j, "display_black", where);
+  f.display_white = json_number(j, "display_white", where);
   f.bits = json_int(j, "bits", where);
   f.shutter = shutter_from_json(json_field(j, "shutter", where), where + ": shutter");
   try {
@@ -161,7 +165,9 @@ inline nlohmann::json to_json(const AngiogramFormationRanges& r) {
           {"shutter_radius", iv(r.shutter_radius)},
           {"shutter_center", iv(r.shutter_center)},
           {"shutter_penumbra_px", iv(r.shutter_penumbra_px)},
-          {"shutter_frame_level", iv(r.shutter_frame_level)}};
+          {"shutter_frame_level", iv(r.shutter_frame_level)},
+          {"display_black", iv(r.display_black)},
+          {"display_white", iv(r.display_white)}};
 }
 
 }  // namespace gimm
