@@ -1,6 +1,8 @@
 // The geometric matcher (match/geometric.hpp), one pair per iteration: centerlines, candidates,
 // DP both ways, consistency. `masks`: from the dataset's vessel masks; `segmented`: from the
 // images (vesselness and hysteresis included). Target (issue 15): <= 20 ms per 512^2 pair.
+// `field`: finding one view's exposed field in its image (match/field_of_view.hpp), what the
+// single-pair modes add per view when no shutter is given (on real frames, PNG input).
 //   GIMM_GEOMETRIC_DATASET=DIR gimm_geometric_bench   (DIR: a gimm-dataset; its first pair)
 // Make a 512^2 dataset with benchmarks/matcher/geometric.sh. Without the variable the cases
 // report an error and skip.
@@ -11,6 +13,7 @@
 
 #include "gimm/dataset/reader.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/geometric.hpp"
 
 namespace {
@@ -62,8 +65,26 @@ void BM_Geometric(benchmark::State& state, bool masks) {
   state.counters["size"] = double(p.a.cols());
 }
 
+void BM_ExposedField(benchmark::State& state) {
+  LoadedPair p;
+  std::string why;
+  if (!load(p, why)) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  double fraction = 0;
+  for (auto _ : state) {
+    const gimm::Image<std::uint8_t> field = gimm::exposed_field(p.a);
+    fraction = gimm::field_fraction(field);
+    benchmark::DoNotOptimize(fraction);
+  }
+  state.counters["field"] = fraction;
+  state.counters["size"] = double(p.a.cols());
+}
+
 }  // namespace
 
+BENCHMARK(BM_ExposedField)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Geometric, masks, true)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_Geometric, segmented, false)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -10,7 +10,7 @@
 
 namespace {
 
-constexpr int kSize = 256;
+int kSize = 256;  // 512 in the last test: the edges are then found on a reduced copy
 
 /// An angiogram-like frame: a soft background (0.54-0.66), Gaussian noise, a dark vessel running
 /// diagonally to the image's edge, and a collimator: `outside(r, c)` is the distance in px past
@@ -111,4 +111,24 @@ TEST_CASE("Field of view: matches outside a field are dropped; bad options are n
   CHECK_THROWS_WITH(gimm::exposed_field(gimm::Image<float>(8, 300)), Catch::Contains("300 x 8"));
   gimm::Image<std::uint8_t> mask(5, 5, 1);
   CHECK_THROWS_WITH(gimm::clear_outside(mask, field), Catch::Contains("10 x 10"));
+}
+
+TEST_CASE("Field of view: at 512 px (found on a reduced copy) the same holds", "[match][field]") {
+  kSize = 512;
+  const double c0 = (kSize - 1) / 2.0;
+  const std::function<double(int, int)> octagon = [&](int r, int c) {
+    const double x = c - c0, y = r - c0;
+    return std::max(std::max(std::abs(x), std::abs(y)) - 224,
+                    (std::abs(x) + std::abs(y)) / std::sqrt(2.0) - 280);
+  };
+  const std::function<double(int, int)> rectangle = [](int r, int c) {
+    return std::max({20.0 - c, c - (kSize - 1 - 9.0), 30.0 - r, r - (kSize - 1 - 12.0)});
+  };
+  for (const auto& shape : {octagon, rectangle}) {
+    const gimm::Image<float> image = collimated(shape, 12, 3);
+    const auto [kept, wrong] = score(gimm::exposed_field(image), shape, 20);
+    CHECK(wrong == 0);
+    CHECK(kept >= 0.97);
+  }
+  kSize = 256;
 }
