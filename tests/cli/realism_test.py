@@ -22,18 +22,13 @@ TOOL = os.path.join(ROOT, "tools", "realism", "realism.py")
 sys.path.insert(0, os.path.dirname(TOOL))
 import realism  # noqa: E402
 
+from harness import Harness  # noqa: E402
+
 TMP = sys.argv[1]
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
-    else:
-        print("ok:   " + what)
+h = Harness(None)  # no binaries: the tool is Python
+check = h.check
 
 
 def near(got, want, rel):
@@ -188,7 +183,4 @@ if os.path.isfile(frame):
 else:
     print(f"skipped: the real-frame check ({frame} absent)")
 
-if failures:
-    print(f"{len(failures)} check(s) failed")
-    sys.exit(1)
-print("all checks passed")
+h.finish("realism")
