@@ -42,7 +42,7 @@ struct FieldOfViewOptions {
   /// rises less.
   double min_step = 0.08;
   double min_relative_step = 0.25;
-  double min_slope = 0.01;   ///< the steepest part of a frame's edge rises this much per px
+  double min_slope = 0.004;  ///< the steepest part of a frame's edge rises this much per px
   double edge_slope = 0.25;  ///< the edge ends where the rise slows to this share of its peak
   double margin_px = 6;      ///< further in from the edge, px
   void validate() const {
