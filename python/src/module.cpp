@@ -55,8 +55,11 @@ PYBIND11_MODULE(_gimm, m) {
   m.def(
       "set_num_threads",
       [](int n) {
-        if (n < 1)
-          throw py::value_error("set_num_threads: n must be >= 1, got " + std::to_string(n));
+        // libgomp aborts the process when asked for a billion threads at the next parallel
+        // region; more than 1024 is a mistake on any machine gimm runs on.
+        if (n < 1 || n > 1024)
+          throw py::value_error("set_num_threads: n must be in [1, 1024], got " +
+                                std::to_string(n));
         omp_set_num_threads(n);
       },
       py::arg("n"),

@@ -348,6 +348,14 @@ TEST_CASE("estimate_fundamental_ransac invalid options throw", "[geometry][funda
   options = {};
   options.max_iterations = 0;
   CHECK_THROWS_AS(estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, options), Error);
+  options = {};  // a count that would run for years, and a minimum above the maximum
+  options.max_iterations = std::int64_t(1) << 62;
+  CHECK_THROWS_WITH(estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, options),
+                    Contains("max_iterations <= 100000000") && Contains("4611686018427387904"));
+  options = {};
+  options.min_iterations = std::int64_t(1) << 62;
+  CHECK_THROWS_WITH(estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, options),
+                    Contains("min_iterations <= max_iterations"));
   options = {};
   CHECK_THROWS_WITH(
       estimate_fundamental_ransac<double>(Points2<double>(scene.x_a.leftCols(7)),

@@ -370,6 +370,17 @@ class Torch(unittest.TestCase):
 
 
 class GilAndThreads(unittest.TestCase):
+    def test_thread_count_is_bounded(self):
+        # 10**9 threads used to be accepted, and libgomp killed the interpreter at the next
+        # render.
+        for bad in (0, -2, 1025, 10**9):
+            with self.assertRaisesRegex(ValueError, rf"\[1, 1024\], got {bad}"):
+                gimm.set_num_threads(bad)
+        before = gimm.get_num_threads()
+        gimm.set_num_threads(2)
+        self.assertEqual(gimm.get_num_threads(), 2)
+        gimm.set_num_threads(before)
+
     def test_rendering_releases_the_gil(self):
         """The main thread runs Python code while another thread is inside render(): with the
         GIL held for the whole render, no main-thread tick could fall inside one."""

@@ -177,6 +177,10 @@ enum class FundamentalModel { perspective, affine };
 enum class EpipolarDistance { sampson, symmetric };
 
 /// Options of estimate_fundamental_ransac. Units: pixels.
+/// The most iterations RANSAC accepts: 1e8 minimal samples take minutes, not years (a count of
+/// 2^62 given by mistake hung the caller).
+inline constexpr std::int64_t kMaxRansacIterations = 100000000;
+
 struct RansacOptions {
   FundamentalModel model = FundamentalModel::perspective;  ///< 8-point or affine minimal solver
   EpipolarDistance distance = EpipolarDistance::sampson;   ///< residual used for inliers
@@ -220,8 +224,11 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   GIMM_CHECK(
       options.confidence > 0 && options.confidence < 1,
       "estimate_fundamental_ransac: confidence must be in (0, 1), got " << options.confidence);
-  GIMM_CHECK(options.max_iterations >= 1 && options.min_iterations >= 0,
-             "estimate_fundamental_ransac: need max_iterations >= 1 and min_iterations >= 0");
+  GIMM_CHECK(options.max_iterations >= 1 && options.max_iterations <= kMaxRansacIterations &&
+                 options.min_iterations >= 0 && options.min_iterations <= options.max_iterations,
+             "estimate_fundamental_ransac: need 1 <= max_iterations <= "
+                 << kMaxRansacIterations << " and 0 <= min_iterations <= max_iterations, got "
+                 << options.min_iterations << " and " << options.max_iterations);
 
   const Eigen::Index n = x_a.cols();
   const double thr_sq = options.threshold_px * options.threshold_px;
