@@ -36,7 +36,7 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
       [](const py::handle& image_a, const py::handle& image_b, const py::handle& camera_a,
          const py::handle& camera_b, const py::object& mask_a, const py::object& mask_b,
          double tolerance_px, bool exact_vesselness, const py::object& min_confidence,
-         const py::object& field_a, const py::object& field_b, bool detect_fields) {
+         const py::object& field_a, const py::object& field_b, const py::object& detect) {
         if (mask_a.is_none() != mask_b.is_none())
           throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
         const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
@@ -67,7 +67,10 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
                                     std::to_string(image.rows()));
             return f;
           }
-          if (detect_fields) return exposed_field(image);
+          // Default: found when segmenting (as gimm-match does for a pair of images), not with
+          // masks (as gimm-match --dataset, whose masks are the truth's).
+          const bool find = detect.is_none() ? mask_a.is_none() : detect.cast<bool>();
+          if (find) return exposed_field(image);
           return std::nullopt;
         };
         const auto fa = field(field_a, a, "field_a"), fb = field(field_b, b, "field_b");
@@ -105,7 +108,7 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
       py::kw_only(), py::arg("mask_a") = py::none(), py::arg("mask_b") = py::none(),
       py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false,
       py::arg("min_confidence") = py::none(), py::arg("field_a") = py::none(),
-      py::arg("field_b") = py::none(), py::arg("detect_fields") = true, R"doc(
+      py::arg("field_b") = py::none(), py::arg("detect_fields") = py::none(), R"doc(
 The training-free geometric matcher (docs/geometric-matcher.md), as gimm-match --method geometric
 does for one pair: vessels segmented from the images (or the masks given), 2D centerlines, and a
 dynamic programme along each centerline over the crossings of its epipolar lines, both ways.
@@ -119,7 +122,8 @@ DP margin a match needs at 4/3 pixels per mm at the isocentre, scaled with the i
 per mm (default None: 0.5 with masks, 1 segmenting; gimm-match --min-confidence).
 field_a, field_b: the exposed fields (nonzero = exposed, each its image's size); vessels outside
 are not matched. Not given: found in the images when detect_fields (the collimator's dark frame,
-match/field_of_view.hpp; as gimm-match does), else the whole image.
+match/field_of_view.hpp), else the whole image; detect_fields None (default): found when the
+images are segmented (as gimm-match does for one pair), not with masks (as gimm-match --dataset).
 Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the ranking: the margin
 times how well the match is placed), margin (N,) (the DP margin, what min_confidence
 thresholds), world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras,
