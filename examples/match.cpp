@@ -479,8 +479,10 @@ int main(int argc, char** argv) {
       for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
                                "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
         GIMM_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
-      loaded_pair = {gimm::read_png_unit(image_a), gimm::read_png_unit(image_b),
-                     read_camera(camera_a), read_camera(camera_b)};
+      loaded_pair.a = gimm::read_png_unit(image_a);
+      loaded_pair.b = gimm::read_png_unit(image_b);
+      loaded_pair.camera_a = read_camera(camera_a);
+      loaded_pair.camera_b = read_camera(camera_b);
       // A PNG carries no shutter: the exposed fields are found in the images.
       loaded_pair.field_a = gimm::exposed_field(loaded_pair.a);
       loaded_pair.field_b = gimm::exposed_field(loaded_pair.b);
