@@ -9,6 +9,7 @@
 #include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/skeleton.hpp"
+#include "gimm/io/files.hpp"
 #include "gimm/io/volume_file.hpp"
 
 int main(int argc, char** argv) {
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
+    gimm::check_outputs_not_inputs({{"--out", out_path}},
+                                   {{"--label", label_path}, {"--truth", truth_path}});
     const auto t0 = std::chrono::steady_clock::now();
     const auto label = gimm::read_volume<std::uint8_t>(label_path);
     const auto split = gimm::split_coronary_systems(label, {}, label_path);

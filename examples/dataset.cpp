@@ -15,6 +15,7 @@
 #include <filesystem>
 
 #include "cli_common.hpp"
+#include "gimm/io/files.hpp"
 #include "gimm/pipeline/dataset_run.hpp"
 
 int main(int argc, char** argv) {
@@ -93,6 +94,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");
+    gimm::check_outputs_not_inputs({{"--out", out}}, {{"--input", input}, {"--views", views_file}},
+                                   true);
     GIMM_CHECK(input.empty() != (phantom_count == 0),
                "gimm-dataset: give exactly one of --input and --phantom");
     // The view protocol picks every view's angles and the centerlines its isocentre: these

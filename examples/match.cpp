@@ -331,6 +331,17 @@ int main(int argc, char** argv) {
 
   return gimm::cli::run(app, argc, argv, [&] {
     gimm::cli::keep_freed_memory();
+    gimm::check_outputs_not_inputs(
+        {{"--out", out}, {"--picture", picture}, {"--tree", tree}, {"--tree-vtk", tree_vtk}},
+        {{"--image-a", image_a},
+         {"--image-b", image_b},
+         {"--camera-a", camera_a},
+         {"--camera-b", camera_b},
+         {"--dicom-a", dicom_a},
+         {"--dicom-b", dicom_b},
+         {"--weights", weights},
+         {"--dataset", dataset}},
+        true);
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
     // The learned matcher's weights (given or shipped) and the flags given for it; what no flag

@@ -11,6 +11,7 @@ import sys
 
 import nibabel as nib
 import numpy as np
+from PIL import Image
 
 from flag_contract import check_flags
 from harness import Harness
@@ -220,5 +221,45 @@ full_disk_runs = [
 ]
 for name, args, limit in full_disk_runs:
     h.run_on_full_disk(name, *args, limit=limit, watch=disk)
+
+# No run writes over what it reads (an output that is, or resolves to, an input; a dataset
+# written over its own source volumes): refused naming both flags, the input unchanged.
+def unchanged_after(path, *args, contains):
+    before = open(path, "rb").read()
+    run(*args, ok=False, contains=contains)
+    check(open(path, "rb").read() == before, f"{args[0]} changed its input {path}")
+
+
+label = os.path.join(ph, "3.label.nii.gz")
+unchanged_after(label, "gimm-centerlines", "--label", label, "--out", label,
+                contains="--out " + label + " is the input --label")
+tree_in = os.path.join(TMP, "tree_in.json")
+run("gimm-centerlines", "--label", label, "--out", tree_in)
+unchanged_after(tree_in, "gimm-centerlines", "--label", label, "--truth", tree_in, "--out",
+                os.path.join(TMP, ".", "tree_in.json"), contains="is the input --truth")
+cam_in = os.path.join(TMP, "cam_in.json")
+open(cam_in, "w").write(run("gimm-carm", "--primary", 30, "--secondary", 20, "--rows", 64,
+                            "--cols", 64))
+link = os.path.join(TMP, "cam_link.json")
+if not os.path.exists(link):
+    os.symlink(cam_in, link)
+png = os.path.join(TMP, "flat.png")
+Image.fromarray(np.full((64, 64), 128, np.uint8)).save(png)
+unchanged_after(cam_in, "gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png,
+                "--camera-a", cam_in, "--camera-b", cam_in, "--out", link,
+                contains="is the input --camera-a")
+unchanged_after(png, "gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png,
+                "--camera-a", cam_in, "--camera-b", cam_in, "--picture", png,
+                contains="--picture " + png + " is the input --image-a")
+weights_in = os.path.join(TMP, "w.safetensors")
+shutil.copy(os.path.join(os.path.dirname(__file__), "..", "..", "weights",
+                         "gimm-phantom-128.safetensors"), weights_in)
+unchanged_after(weights_in, "gimm-match", "--image-a", png, "--image-b", png, "--weights",
+                weights_in, "--out", weights_in, contains="is the input --weights")
+src = os.path.join(TMP, "src_ds")
+run("gimm-phantom", "--seed", 4, "--out", os.path.join(src, "patients", "7"))
+volume = os.path.join(src, "patients", "7", "4.img.nii.gz")
+unchanged_after(volume, "gimm-dataset", "--input", os.path.join(src, "patients", "7"), "--out",
+                src, contains="lies inside the output --out")
 
 h.finish("cli_test")

@@ -172,6 +172,53 @@ inline void write_file_atomic(const std::filesystem::path& path, const std::stri
 
 /// Makes `dir` and its missing parents; WriteError naming it and the OS reason on failure (a
 /// folder needs space too).
+/// A path given on a command line or to a job, with the name it was given under ("--out").
+struct NamedPath {
+  std::string name;
+  std::filesystem::path path;
+};
+
+/// The path with symbolic links, "." and ".." resolved as far as it exists (weakly canonical,
+/// absolute): two spellings of one file compare equal.
+inline std::filesystem::path resolved_path(const std::filesystem::path& p) {
+  std::error_code ec;
+  std::filesystem::path r = std::filesystem::weakly_canonical(std::filesystem::absolute(p), ec);
+  return ec ? std::filesystem::absolute(p).lexically_normal() : r;
+}
+
+/// Whether `inner` is `outer` or lies below it (resolved paths).
+inline bool path_is_within(const std::filesystem::path& inner, const std::filesystem::path& outer) {
+  const std::filesystem::path i = resolved_path(inner), o = resolved_path(outer);
+  auto a = i.begin(), b = o.begin();
+  for (; b != o.end() && !b->empty(); ++a, ++b)
+    if (a == i.end() || *a != *b) return false;
+  return true;
+}
+
+/// Refuses a run that would write over what it reads: an output that is (or resolves to, or is
+/// a hard link of) one of the inputs, and, with `folders_contain`, an input inside an output
+/// folder (a dataset written over its own source volumes). Empty paths are not given ones.
+inline void check_outputs_not_inputs(const std::vector<NamedPath>& outputs,
+                                     const std::vector<NamedPath>& inputs,
+                                     bool folders_contain = false) {
+  for (const auto& out : outputs) {
+    if (out.path.empty()) continue;
+    for (const auto& in : inputs) {
+      if (in.path.empty()) continue;
+      std::error_code ec;
+      const bool same = resolved_path(out.path) == resolved_path(in.path) ||
+                        std::filesystem::equivalent(out.path, in.path, ec);
+      GIMM_CHECK(!same, out.name << " " << out.path.string() << " is the input " << in.name << " "
+                                 << in.path.string()
+                                 << ": the run would overwrite what it reads; write elsewhere");
+      GIMM_CHECK(!folders_contain || !path_is_within(in.path, out.path),
+                 in.name << " " << in.path.string() << " lies inside the output " << out.name << " "
+                         << out.path.string()
+                         << ": the run would write over its own input; write elsewhere");
+    }
+  }
+}
+
 inline void create_folders(const std::filesystem::path& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
