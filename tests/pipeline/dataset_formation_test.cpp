@@ -11,6 +11,7 @@
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/pipeline/dataset.hpp"
+#include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;
 using namespace gimm;
@@ -19,9 +20,7 @@ using nlohmann::json;
 namespace {
 
 fs::path fresh_out(const std::string& name) {
-  const fs::path out = fs::path(GIMM_TEST_TMP) / "pipeline" / "formation" / name;
-  fs::remove_all(out);
-  return out;
+  return gimm_test::fresh_pipeline_dir("formation", name, false);
 }
 
 /// Every file under `dir`, by its path relative to `dir`, with its bytes.

@@ -9,6 +9,7 @@
 
 #include "gimm/io/nifti.hpp"
 #include "gimm/pipeline/dataset.hpp"
+#include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;
 using namespace gimm;
@@ -17,10 +18,7 @@ using nlohmann::json;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::path(GIMM_TEST_TMP) / "pipeline" / "patient_steps" / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return gimm_test::fresh_pipeline_dir("patient_steps", name, true);
 }
 
 PatientSource phantom_source(std::uint64_t seed) {

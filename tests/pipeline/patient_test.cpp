@@ -8,6 +8,7 @@
 
 #include "gimm/io/nifti.hpp"
 #include "gimm/pipeline/dataset.hpp"
+#include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;
 using namespace gimm;
@@ -50,9 +51,7 @@ PatientSource write_patient(const std::string& id, const Volume<std::uint8_t>& l
 }
 
 fs::path fresh_out(const std::string& name) {
-  const fs::path out = tmp_root() / name;
-  fs::remove_all(out);
-  return out;
+  return gimm_test::fresh_pipeline_dir("patient", name, false);
 }
 
 std::set<std::string> file_prefixes(const fs::path& dir) {
