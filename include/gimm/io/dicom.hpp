@@ -52,6 +52,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -628,6 +629,9 @@ inline bool creator_in_dictionary(std::uint16_t group, const std::string& creato
 inline void warn_unused_table_tags(const TagReader& tags, const gdcm::DataSet& ds,
                                    const std::string& used_creator, std::vector<std::string>& out) {
   const gdcm::Dicts& dicts = gdcm::Global::GetInstance().GetDicts();
+  // Whether each (group, creator) is in the dictionary: asked once per block, not per element
+  // (a vendor file has hundreds of private elements, each answer 256 lookups).
+  std::map<std::pair<std::uint16_t, std::string>, bool> known_creator;
   for (const gdcm::DataElement& de : ds.GetDES()) {
     const gdcm::Tag tag = de.GetTag();
     const std::uint16_t group = tag.GetGroup(), element = tag.GetElement();
@@ -639,7 +643,9 @@ inline void warn_unused_table_tags(const TagReader& tags, const gdcm::DataSet& d
         dicts.GetPrivateDict().GetDictEntry(gdcm::PrivateTag(group, offset, creator->c_str()));
     const std::string name = entry.GetName() ? entry.GetName() : "";
     bool table_like = !name.empty() && has_table_word(name);
-    if (name.empty() && !creator_in_dictionary(group, *creator))
+    const auto block = known_creator.try_emplace({group, *creator}, false);
+    if (block.second) block.first->second = creator_in_dictionary(group, *creator);
+    if (name.empty() && !block.first->second)
       for (const auto& known : kKnownTableCreators)
         table_like |=
             group == known.group &&
