@@ -33,8 +33,9 @@ int main(int argc, char** argv) {
                  "<id>.label<ext>, <ext> e.g. .nii.gz");
   app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
       ->check(CLI::PositiveNumber);
-  app.add_option("--phantom-size", phantom_size, "small|imagecas")
-      ->check(CLI::IsMember({"small", "imagecas"}))
+  app.add_option("--phantom-size", phantom_size,
+                 "small|imagecas|chest (the whole chest, for realistic views)")
+      ->check(CLI::IsMember({"small", "imagecas", "chest"}))
       ->capture_default_str();
   app.add_option("--out", out, "output directory");
   app.add_option("--seed", options.seed, "run seed (views, splits, sparse labels, phantoms)")

@@ -1,5 +1,5 @@
 // gimm-phantom: writes a procedural CCTA patient in ImageCAS form.
-//   gimm-phantom --seed S --out DIR [--size small|imagecas] [--dominance
+//   gimm-phantom --seed S --out DIR [--size small|imagecas|chest] [--dominance
 //   auto|right|left|codominant]
 //                [--noise HU] [--preview]
 // Writes DIR/S.img.nii.gz (HU, int16), DIR/S.label.nii.gz (1 = coronary, uint8) and
@@ -78,8 +78,10 @@ int main(int argc, char** argv) {
   bool preview = false;
   app.add_option("--seed", seed, "patient seed")->required();
   app.add_option("--out", out_dir, "output directory (created if missing)")->required();
-  app.add_option("--size", size, "small (128x128x64) | imagecas (512x512x256)")
-      ->check(CLI::IsMember({"small", "imagecas"}))
+  app.add_option(
+         "--size", size,
+         "small (128x128x64) | imagecas (512x512x256) | chest (224x165x190, the whole chest)")
+      ->check(CLI::IsMember({"small", "imagecas", "chest"}))
       ->capture_default_str();
   app.add_option("--dominance", dominance, "auto (seeded) | right | left | codominant")
       ->check(CLI::IsMember({"auto", "right", "left", "codominant"}))
@@ -105,6 +107,10 @@ int main(int argc, char** argv) {
                               {"noise_hu", noise},
                               {"heart_height_mm", p.anatomy.height_mm},
                               {"heart_radius_mm", p.anatomy.radius_mm}};
+    if (options.size == gimm::PhantomSize::chest)
+      centerlines["phantom"]["chest"] = {{"left_dome_z_mm", p.anatomy.left_dome_z},
+                                         {"right_dome_z_mm", p.anatomy.right_dome_z},
+                                         {"t1_top_z_mm", p.anatomy.t1_top_z}};
     const std::filesystem::path base = std::filesystem::path(out_dir) / std::to_string(seed);
     // All or nothing: written under a staging folder and moved into DIR at the end, so a failure
     // (a full disk) leaves DIR as it was (or absent).

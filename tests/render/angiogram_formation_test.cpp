@@ -219,6 +219,34 @@ TEST_CASE("Each acquisition step does what its physics says", "[render][formatio
   }
 }
 
+TEST_CASE("The exposure control senses the dose at the image centre, over the heart",
+          "[render][formation]") {
+  // A dark centre (the heart: optical depth 5) in bright surroundings (the lungs: 3) that
+  // cover most of the field: a field-wide median would set the dose on the lungs and starve
+  // the heart of quanta.
+  Image<float> scene(256, 256, 3.0f);
+  for (int r = 80; r < 176; ++r)
+    for (int c = 80; c < 176; ++c) scene(r, c) = 5.0f;
+  AngiogramFormation f = bare();
+  f.detector_photons = 4000;
+  Rng rng(3);
+  const FormedAngiogram out = form_angiogram(scene, kPixelMm, f, rng);
+  // The sensed region (rows and columns 64-191) is 56% heart: its median is the heart's.
+  CHECK(out.photons_per_unit * std::exp(-5.0) == Approx(4000).epsilon(1e-4));
+  // A field with nothing exposed at the centre falls back to the whole field.
+  Image<std::uint8_t> corner(256, 256, 0);
+  for (int r = 0; r < 40; ++r)
+    for (int c = 0; c < 40; ++c) corner(r, c) = 1;
+  const Image<std::uint8_t> sensed = detail::exposure_sensing_mask(corner);
+  CHECK(sensed.storage() == corner.storage());
+  Image<std::uint8_t> full(256, 256, 1);
+  const Image<std::uint8_t> centre = detail::exposure_sensing_mask(full);
+  CHECK(centre(64, 64) == 1);
+  CHECK(centre(191, 191) == 1);
+  CHECK(centre(63, 128) == 0);
+  CHECK(centre(128, 192) == 0);
+}
+
 TEST_CASE("A 3 mm vessel in a water slab looks as in clinical frames at the defaults",
           "[render][formation]") {
   const AngiogramFormation defaults;

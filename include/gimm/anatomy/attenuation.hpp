@@ -21,6 +21,7 @@
 ///                 reaches 1000+ HU and trabecular bone sits at 150-400 HU, so no threshold
 ///                 separates them. docs/recipes.md.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -132,13 +133,16 @@ inline void check_attenuation(const Volume<float>& mu, const std::string& name) 
                     << " at voxel " << v << " (a CT in HU needs a contrast recipe)");
 }
 
-/// The dense tissue of a CCTA (HU >= blood_pool_lo_hu), told apart
-/// by structure: per 26-connected component, bone when its surface (voxels with a face
-/// neighbour inside the grid below blood_pool_lo_hu) is brighter than its inside by
-/// bone_shell_margin_hu - a cortex around trabecular bone or marrow - and blood otherwise: a
-/// vessel or chamber is as bright or brighter inside (its edge is blurred by partial volume),
-/// however dense its contrast. The grid's own faces are not surface: a vessel cut by the scan's
-/// coverage stays blood. Components too thin to have an inside go by their mean HU (bone_hu).
+/// The dense tissue of a CCTA (HU >= blood_pool_lo_hu), told apart by structure: per
+/// 26-connected component, bone when it has a cortex - a layer brighter than what it encloses
+/// by bone_shell_margin_hu - and blood otherwise: a vessel or chamber is as bright or brighter
+/// inside, however dense its contrast. The cortex is looked for in two places: the surface
+/// (layer 1: voxels with a face neighbour inside the grid below blood_pool_lo_hu) against all
+/// inside it, and, because partial volume dims the outermost voxels of a bone whose cortex is
+/// about a voxel thick (every real CT, and the chest phantom's blended edges), layer 2 (face
+/// neighbours of layer 1) against all deeper. A component whose layer 2 has nothing deeper
+/// goes by layer 2's mean HU (bone_hu); one of layer 1 only by its mean HU. The grid's own
+/// faces are not surface: a vessel cut by the scan's coverage stays blood.
 /// Limitation: a blood pool fused to bone at >= blood_pool_lo_hu forms one component and is
 /// classified as one (docs/recipes.md). The injected lumen is not excluded (the recipe
 /// overrides it), so one classification serves both coronary systems of a patient.
@@ -148,6 +152,39 @@ struct DenseTissue {
   std::int64_t blood_voxels = 0, bone_voxels = 0;
 };
 
+namespace detail {
+
+/// Whether dense voxel (i, j, k) has a face neighbour inside the grid for which `outside` holds.
+template <class Outside>
+bool touches(const Volume<std::uint8_t>& dense, int i, int j, int k, Outside outside) {
+  const int nx = dense.nx(), ny = dense.ny(), nz = dense.nz();
+  return (i > 0 && outside(i - 1, j, k)) || (i + 1 < nx && outside(i + 1, j, k)) ||
+         (j > 0 && outside(i, j - 1, k)) || (j + 1 < ny && outside(i, j + 1, k)) ||
+         (k > 0 && outside(i, j, k - 1)) || (k + 1 < nz && outside(i, j, k + 1));
+}
+
+/// Per component: HU sums and counts of layer 1, layer 2 and deeper.
+struct LayerSums {
+  std::array<double, 3> sum{};
+  std::array<std::int64_t, 3> n{};
+  double mean(int a, int b) const {
+    double s = 0;
+    std::int64_t c = 0;
+    for (int l = a; l <= b; ++l) s += sum[l], c += n[l];
+    return c ? s / c : 0.0;
+  }
+  bool bone(const ContrastRecipe& r) const {
+    const bool surface_cortex = n[1] + n[2] > 0 ? mean(0, 0) > mean(1, 2) + r.bone_shell_margin_hu
+                                                : mean(0, 0) >= r.bone_hu;
+    const bool inner_cortex = n[2] > 0   ? mean(1, 1) > mean(2, 2) + r.bone_shell_margin_hu
+                              : n[1] > 0 ? mean(1, 1) >= r.bone_hu
+                                         : false;
+    return surface_cortex || inner_cortex;
+  }
+};
+
+}  // namespace detail
+
 /// `hu`: any real voxel type (float, or int16 as CCTAs are stored).
 template <class H>
 DenseTissue classify_dense_tissue(const Volume<H>& hu, const ContrastRecipe& recipe) {
@@ -155,31 +192,37 @@ DenseTissue classify_dense_tissue(const Volume<H>& hu, const ContrastRecipe& rec
   Volume<std::uint8_t> dense(hu.geometry(), 0);
   for (std::int64_t v = 0; v < n; ++v) dense.data()[v] = hu.data()[v] >= recipe.blood_pool_lo_hu;
   const Components comps = connected_components(dense);
-  // Mean HU of each component's surface and inside.
-  const int count = comps.count();
-  std::vector<double> shell_sum(count, 0.0), inner_sum(count, 0.0);
-  std::vector<std::int64_t> shell_n(count, 0), inner_n(count, 0);
+  // Layer of each dense voxel: 1 on the surface, 2 under it, 3 deeper (0: not dense).
+  Volume<std::uint8_t> layer(hu.geometry(), 0);
   const int nx = hu.nx(), ny = hu.ny(), nz = hu.nz();
-  for (int k = 0; k < nz; ++k)
+  const auto not_dense = [&](int i, int j, int k) { return !dense(i, j, k); };
+  const auto in_layer1 = [&](int i, int j, int k) { return layer(i, j, k) == 1; };
+  parallel_for(0, nz, [&](std::int64_t kk) {
+    const int k = static_cast<int>(kk);
     for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        const std::int32_t id = comps.labels(i, j, k);
-        if (id == 0) continue;
-        const bool surface =
-            (i > 0 && !dense(i - 1, j, k)) || (i + 1 < nx && !dense(i + 1, j, k)) ||
-            (j > 0 && !dense(i, j - 1, k)) || (j + 1 < ny && !dense(i, j + 1, k)) ||
-            (k > 0 && !dense(i, j, k - 1)) || (k + 1 < nz && !dense(i, j, k + 1));
-        (surface ? shell_sum : inner_sum)[id - 1] += hu(i, j, k);
-        ++(surface ? shell_n : inner_n)[id - 1];
-      }
+      for (int i = 0; i < nx; ++i)
+        if (dense(i, j, k)) layer(i, j, k) = detail::touches(dense, i, j, k, not_dense) ? 1 : 3;
+  });
+  parallel_for(0, nz, [&](std::int64_t kk) {
+    const int k = static_cast<int>(kk);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        if (layer(i, j, k) == 3 && detail::touches(dense, i, j, k, in_layer1)) layer(i, j, k) = 2;
+  });
+  const int count = comps.count();
+  std::vector<detail::LayerSums> sums(count);
+  for (std::int64_t v = 0; v < n; ++v) {
+    const std::int32_t id = comps.labels.data()[v];
+    if (id == 0) continue;
+    const int l = layer.data()[v] - 1;
+    sums[id - 1].sum[l] += hu.data()[v];
+    sums[id - 1].n[l] += 1;
+  }
   DenseTissue out;
   std::vector<std::uint8_t> class_of(count + 1, 0);
   using Dense = ContrastRecipe::Dense;
   for (int c = 0; c < count; ++c) {
-    const double shell_mean = shell_n[c] ? shell_sum[c] / shell_n[c] : 0.0;
-    const bool bone = inner_n[c] == 0
-                          ? (shell_sum[c] + inner_sum[c]) / comps.sizes[c] >= recipe.bone_hu
-                          : shell_mean > inner_sum[c] / inner_n[c] + recipe.bone_shell_margin_hu;
+    const bool bone = sums[c].bone(recipe);
     class_of[c + 1] = static_cast<std::uint8_t>(bone ? Dense::bone : Dense::blood);
     (bone ? out.bone_components : out.blood_components) += 1;
     (bone ? out.bone_voxels : out.blood_voxels) += comps.sizes[c];

@@ -28,11 +28,13 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "gimm/anatomy/centerlines.hpp"
+#include "gimm/anatomy/chest.hpp"
 #include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
@@ -41,16 +43,21 @@
 
 namespace gimm {
 
-enum class PhantomSize { small, imagecas };
+/// small and imagecas: a cardiac CT's crop (205 x 205 x 128 mm) at two resolutions; chest: the
+/// whole chest (anatomy/chest.hpp) on the small grid's voxels, for C-arm views that see past a
+/// CT's crop. The heart and tree of a seed are the same at every size; small and imagecas keep
+/// the thorax the shipped weights and recorded figures were made on.
+enum class PhantomSize { small, imagecas, chest };
 enum class Dominance { automatic, right, left, codominant };
 
 inline PhantomSize parse_phantom_size(const std::string& s) {
   if (s == "small") return PhantomSize::small;
   if (s == "imagecas") return PhantomSize::imagecas;
-  GIMM_FAIL("phantom size must be small|imagecas, got '" << s << "'");
+  if (s == "chest") return PhantomSize::chest;
+  GIMM_FAIL("phantom size must be small|imagecas|chest, got '" << s << "'");
 }
 inline const char* to_string(PhantomSize s) {
-  return s == PhantomSize::imagecas ? "imagecas" : "small";
+  return s == PhantomSize::imagecas ? "imagecas" : s == PhantomSize::chest ? "chest" : "small";
 }
 inline Dominance parse_dominance(const std::string& s) {
   if (s == "auto") return Dominance::automatic;
@@ -76,6 +83,15 @@ inline const char* to_string(Dominance d) {
 /// cardiac field of view); small covers the same field at 128 x 128 x 64 (1.6 x 1.6 x 2 mm).
 inline VolumeGeometry phantom_grid(PhantomSize size) {
   VolumeGeometry g;
+  if (size == PhantomSize::chest) {
+    // The body outline (165 x 118 mm semi-axes about x = -25, y = 25, moved up to 8 mm by the
+    // seed) with 6 mm to spare, and 380 mm head to foot: a 30-degree tilted view through the
+    // heart stays inside at the detector's edge.
+    g.dims = {224, 165, 190};
+    g.spacing = {1.6, 1.6, 2.0};
+    g.origin = {-204 + 0.8, -107 + 0.8, -189};
+    return g;
+  }
   if (size == PhantomSize::imagecas) {
     g.dims = {512, 512, 256};
     g.spacing = {0.4, 0.4, 0.5};
@@ -105,6 +121,12 @@ struct PhantomAnatomy {
   double radius_mm = 45;        ///< ventricular radius at the base
   Dominance dominance = Dominance::right;
   double lumen_hu = 400;
+  Eigen::Vector2d body_axis{-25, 25};  ///< x, y of the chest's axis, mm
+  /// The chest's landmarks (PhantomSize::chest; NaN at the other sizes): the top of the left
+  /// and right diaphragm domes and of T1, mm.
+  double left_dome_z = std::numeric_limits<double>::quiet_NaN();
+  double right_dome_z = std::numeric_limits<double>::quiet_NaN();
+  double t1_top_z = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Phantom {
@@ -208,6 +230,15 @@ class HeartFrame {
 };
 
 constexpr double kDeg = kPi / 180.0;  // degrees to radians
+
+/// The lowest z of the ventricles' surface (where the diaphragm meets the heart).
+inline double ventricles_bottom_z(const HeartFrame& frame, const PhantomAnatomy& a) {
+  double z = 1e30;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j < 36; ++j)
+      z = std::min(z, frame.surface(a.height_mm * i / 20.0, j * 10 * kDeg, 0).z());
+  return z;
+}
 
 /// Control points of a branch on the epicardium: (h in mm, phi in degrees).
 struct SurfacePath {
@@ -365,6 +396,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   T.chest_centre = Eigen::Vector2d(-25 + shift.x(), 25 + shift.y());
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   const double cx = T.chest_centre.x(), cy = T.chest_centre.y();
+  A.body_axis = T.chest_centre;
   T.lung_left = {Vector3d(cx + 78, cy + 5, 10), I, Vector3d(58, 80, 150)};
   T.lung_right = {Vector3d(cx - 78, cy + 5, 10), I, Vector3d(60, 82, 150)};
   Eigen::Matrix3d heart_axes;
@@ -502,6 +534,16 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   const double lumen = A.lumen_hu, right_blood = A.lumen_hu - 80;
   const TissueHu tissue(Rng(options.seed).fork(0x7155e));
   const double rib_spacing = 26, rib_phase = rng.uniform(0, rib_spacing);
+  std::optional<ChestModel> chest;
+  if (options.size == PhantomSize::chest)
+    chest.emplace(T.chest_centre, T.body_a, T.body_b, ventricles_bottom_z(frame, A),
+                  BoneHu{tissue.cortex, tissue.trabecular, tissue.marrow},
+                  Rng(options.seed).fork(0xc4e57));
+  if (chest) {
+    A.left_dome_z = chest->left_dome_z();
+    A.right_dome_z = chest->right_dome_z();
+    A.t1_top_z = chest->t1_top_z();
+  }
   auto hu_at = [&](const Vector3d& p) -> double {
     const double bx = (p.x() - cx) / T.body_a, by = (p.y() - cy) / T.body_b;
     const double body = bx * bx + by * by;
@@ -522,6 +564,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     if (T.ra.level(p) < 1) return right_blood;
     if (T.la.inflated(2.5).level(p) < 1 || T.ra.inflated(2.5).level(p) < 1) return 100;
     if (frame.ventricle_level(p, 4) < 1) return -80;  // epicardial fat, where the coronaries run
+    if (chest) return chest->hu(p);
     // Skeleton.
     const double sx = p.x() - cx, sy = p.y() - (cy + 80);
     const double spine = std::hypot(sx, sy);

@@ -47,6 +47,9 @@
 
 namespace gimm {
 
+/// The angiography recipe's soft-tissue weight in formed views (system_renderer says why).
+inline constexpr double kFormedSoftTissueWeight = 1.0;
+
 struct DatasetOptions {
   std::uint64_t seed = 0;
   ViewMode view_mode = ViewMode::shared;
@@ -109,6 +112,7 @@ struct DatasetOptions {
     if (form_angiogram)
       j["formation"] = {
           {"stage", "angiogram"},
+          {"soft_tissue_weight", kFormedSoftTissueWeight},
           {"ranges", gimm::to_json(formation_ranges)},
           {"iodine_ranges",
            {{"iodine_mg_per_ml",
@@ -379,7 +383,13 @@ inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::u
                                     const IodineContrast* iodine = nullptr) {
   RendererOptions ro;
   ro.recipe.preset = o.preset;
-  if (iodine) ro.recipe.lumen_hu = iodine->lumen_hu();
+  if (iodine) {
+    ro.recipe.lumen_hu = iodine->lumen_hu();
+    // A formed view is physics: soft tissue attenuates in full. The recipe's soft_weight (0.35)
+    // stands in for the range compression and window of a clinical system, which the
+    // formation applies itself; kept, it would make bone 3x denser than soft tissue.
+    ro.recipe.soft_weight = kFormedSoftTissueWeight;
+  }
   ro.pad_mm = o.pad_mm;
   ro.projector = o.projector;
   ro.vessels = o.vessel_mode;

@@ -13,8 +13,11 @@
 ///   scatter     S = SPR G_scatter * P                (convolution model, SPR the flat-field
 ///                                                     scatter-to-primary ratio)
 ///   blur        D = G_blur * (P + S)                 (focal spot and detector in quadrature)
-///   dose (AEC)  N0 = photons / median_field(D)       (the exposure control holds the detector
-///                                                     dose, whatever the patient's thickness)
+///   dose (AEC)  N0 = photons / median_sensed(D)      (the exposure control holds the detector
+///                                                     dose, whatever the patient's thickness,
+///                                                     where it senses it: the central half of
+///                                                     the image in each direction, inside the
+///                                                     shutters - over the heart, not the lungs)
 ///   noise       n = Poisson(N0 D) + Normal(0, e)     (e: electronic noise, photon units)
 ///   log         s = ln(max(n, 0.5) / N0)             (s = ln D without noise)
 ///   compress    s = s - k G_range * s                (dynamic-range compression)
@@ -150,6 +153,19 @@ struct FormedAngiogram {
 
 namespace detail {
 
+/// Where the exposure control senses the dose: the exposed pixels of the image's central half
+/// in each direction (a cardiac system's measuring field sits at the centre, on the heart); the
+/// whole exposed field when the shutters leave nothing there.
+inline Image<std::uint8_t> exposure_sensing_mask(const Image<std::uint8_t>& field) {
+  const int rows = field.rows(), cols = field.cols();
+  Image<std::uint8_t> sensed(rows, cols, 0);
+  bool any = false;
+  for (int r = rows / 4; r < rows - rows / 4; ++r)
+    for (int c = cols / 4; c < cols - cols / 4; ++c)
+      if (field(r, c)) sensed(r, c) = 1, any = true;
+  return any ? sensed : field;
+}
+
 /// A Gaussian blur for the broad kernels of scatter and range compression (tens of px, beyond
 /// a direct kernel's cost and gaussian_blur's 64 px): box-average f x f blocks, blur the small
 /// image, interpolate bilinearly back. The box adds (f^2 - 1) / 12 px^2 of variance and the
@@ -237,7 +253,8 @@ inline FormedAngiogram form_angiogram_from_intensity(const Image<float>& primary
   detected = gaussian_blur(detected, std::hypot(f.focal_spot_blur_px, f.detector_blur_px));
   Image<float> s(rows, cols);
   if (f.detector_photons > 0) {
-    const double median = detail::masked_percentile(detected, out.field_mask, 50);
+    const double median =
+        detail::masked_percentile(detected, detail::exposure_sensing_mask(out.field_mask), 50);
     GIMM_CHECK(median > 0,
                "angiogram formation: no signal reaches the detector's field (median "
                "transmitted intensity "
@@ -326,8 +343,8 @@ struct AngiogramFormationRanges {
   Interval detector_blur_px{0.4, 1.2};
   Interval detector_photons{2500, 12000};  ///< log-uniform
   Interval electronic_noise{0, 30};
-  Interval range_compression{0.3, 0.7};
-  Interval range_compression_sigma_px{24, 96};
+  Interval range_compression{0.75, 0.9};
+  Interval range_compression_sigma_px{16, 48};
   Interval edge_gain{0.3, 0.9};
   Interval edge_radius_px{1.5, 5};
   Interval window_min_width{0.65, 1.0};
