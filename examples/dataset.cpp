@@ -59,8 +59,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"siddon", "trilinear"}))
       ->capture_default_str();
   app.add_option("--vessels", vessel_mode,
-                 "voxel (label voxels) | mesh (Embree chords, anti-aliased)")
-      ->check(CLI::IsMember({"voxel", "mesh"}))
+                 "voxel (label voxels) | mesh (Embree chords, anti-aliased) | tubes (phantoms: "
+                 "the analytic tubes' mesh, and their axes as the labelled centerlines)")
+      ->check(CLI::IsMember({"voxel", "mesh", "tubes"}))
       ->capture_default_str();
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
   app.add_flag("--line-integrals", options.write_line_integrals,
@@ -86,6 +87,12 @@ int main(int argc, char** argv) {
   merge_cmd->add_option("--out", out, "the dataset directory the shards wrote to")->required();
   merge_cmd->add_option("--export", export_format, "also write OUT/reference (reference layout)")
       ->check(CLI::IsMember({"reference"}));
+  app.callback([&] {  // during parsing: a usage error (exit 2)
+    if (vessel_mode == "tubes" && !input.empty())
+      throw CLI::ValidationError("--vessels",
+                                 "tubes are a phantom's analytic vessels; with "
+                                 "--input the vessels are the label (voxel|mesh)");
+  });
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {
       const gimm::MergedShards merged = gimm::merge_dataset(out, export_format);
@@ -111,7 +118,8 @@ int main(int argc, char** argv) {
     if (!views_file.empty()) options.listed_views = gimm::read_view_list(views_file);
     options.preset = gimm::parse_contrast_preset(recipe);
     options.projector = gimm::parse_projector(projector);
-    options.vessel_mode = gimm::parse_vessel_mode(vessel_mode);
+    options.phantom_tubes = vessel_mode == "tubes";
+    options.vessel_mode = gimm::parse_vessel_mode(options.phantom_tubes ? "mesh" : vessel_mode);
     gimm::DatasetRunOptions run;
     run.shard = gimm::resolve_shard(shard_flag);
     run.quiet = quiet;

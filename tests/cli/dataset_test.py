@@ -331,6 +331,12 @@ for flag in (["--primary", "30"], ["--secondary", "-10"], ["--isocenter", "0", "
     check(proc.returncode != 0 and f"{flag[0]} sets nothing" in proc.stderr and
           not os.path.exists(out), f"{flag[0]}: {proc.stderr}")
 
+# --vessels tubes are a phantom's: with --input, a usage error naming the flag, before any work.
+out = os.path.join(TMP, "tubes_input")
+proc = run(["--input", TMP, "--vessels", "tubes", "--out", out], ok=False)
+check(proc.returncode == 2 and "--vessels" in proc.stderr and "phantom" in proc.stderr and
+      not os.path.exists(out), f"--vessels tubes with --input: {proc.returncode} {proc.stderr}")
+
 # The progress line: patients done, rate and ETA; after a full resume the rate counts no one.
 LOUD = [a for a in COMMON if a != "--quiet"]
 proc = run(LOUD[:1] + ["1"] + LOUD[2:] + ["--out", os.path.join(TMP, "progress")])

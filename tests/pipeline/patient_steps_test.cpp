@@ -212,6 +212,59 @@ TEST_CASE(
   CHECK(t.pairs > 0);
 }
 
+TEST_CASE("Patient steps: --vessels tubes images and labels the phantom's own tubes",
+          "[pipeline][patient_steps][tubes]") {
+  const PatientVolumes& patient = patient5();
+  PhantomOptions po;
+  po.seed = 5;
+  const Phantom p = make_phantom(po);
+  REQUIRE(patient.tubes);
+  REQUIRE(patient.tubes->branches.size() == p.centerlines.branches.size());
+  CHECK(patient.tubes->branches[0].points == p.centerlines.branches[0].points);
+
+  std::shared_ptr<const VesselSurface> surface;
+  const CenterlineTree tree = system_tubes(patient, CoronarySystem::LCA, "ph5", surface);
+  REQUIRE(surface);
+  CHECK_NOTHROW(tree.validate("LCA tubes"));
+  std::size_t lca = 0;
+  for (const auto& b : p.centerlines.branches) lca += b.system == CoronarySystem::LCA;
+  CHECK(tree.branches.size() == lca);
+  for (const auto& b : tree.branches) CHECK(b.system == CoronarySystem::LCA);
+
+  // Rendered with the tubes, every in-image centreline point lies on its vessel's mask.
+  DatasetOptions o;
+  o.carm.rows = o.carm.cols = 256;
+  o.carm.pixel_mm = 1.0;
+  o.vessel_mode = VesselMode::mesh;
+  o.phantom_tubes = true;
+  const CoronarySplit split = split_coronary_systems(patient.label);
+  const DenseTissue dense = classify_dense_tissue(patient.hu, ContrastRecipe{});
+  const ViewRenderer renderer =
+      system_renderer(patient.hu, split.lca, o, "ph5", &dense, nullptr, surface);
+  CArm carm = o.carm;
+  carm.primary_deg = -30;
+  carm.secondary_deg = 25;
+  carm.isocenter = vessel_isocenter(split.lca);
+  const Camerad camera = carm.camera();
+  const RenderedView view = renderer.render(camera);
+  std::size_t seen = 0, on_mask = 0;
+  for (const LabelPoint& q : flatten_centerlines(tree, CoronarySystem::LCA)) {
+    const Eigen::Vector2d uv = camera.project(q.world).uv;
+    const long c = std::lround(uv.x()), r = std::lround(uv.y());
+    if (r < 0 || c < 0 || r >= carm.rows || c >= carm.cols) continue;
+    ++seen;
+    on_mask += view.vessel_mask(static_cast<int>(r), static_cast<int>(c)) != 0;
+  }
+  INFO(on_mask << " of " << seen << " points on the mask");
+  REQUIRE(seen > 300);
+  CHECK(on_mask == seen);
+
+  // A CT patient has no analytic tubes: named, not guessed.
+  PatientVolumes ct{patient.hu, patient.label, std::nullopt};
+  CHECK_THROWS_WITH(system_tubes(ct, CoronarySystem::LCA, "ct7", surface),
+                    Catch::Contains("patient ct7") && Catch::Contains("needs a phantom patient"));
+}
+
 TEST_CASE("Patient steps: the small records", "[pipeline][patient_steps]") {
   // vessel_isocenter: the centroid of the lumen voxels in world mm (not index space); an empty
   // mask is an error, not NaN. grid_center: the middle of the grid.

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <future>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -28,6 +29,7 @@
 #include "gimm/anatomy/isocenter.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
+#include "gimm/anatomy/tube_mesh.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"
 #include "gimm/core/hash.hpp"
 #include "gimm/dataset/writer.hpp"
@@ -62,6 +64,10 @@ struct DatasetOptions {
   double pad_mm = kDefaultPadMm;
   Projector projector = Projector::siddon;
   VesselMode vessel_mode = VesselMode::voxel;
+  /// Phantoms only, with vessel_mode mesh: the surface is the phantom's analytic tubes
+  /// (anatomy/tube_mesh.hpp) instead of its label's voxel surface, and the labelled
+  /// centerlines are the same tubes' axes instead of the label's skeleton (`--vessels tubes`).
+  bool phantom_tubes = false;
   std::size_t sparse_count = 20;
   bool write_line_integrals = false;  ///< also each view's float32 line integrals (<view>.npy)
   /// Also each view as a C-arm forms it (render/angiogram_formation.hpp), a named stage after
@@ -100,7 +106,7 @@ struct DatasetOptions {
                         {"recipe", gimm::to_string(preset)},
                         {"pad_mm", pad_mm},
                         {"projector", gimm::to_string(projector)},
-                        {"vessel_mode", gimm::to_string(vessel_mode)},
+                        {"vessel_mode", phantom_tubes ? "tubes" : gimm::to_string(vessel_mode)},
                         {"sparse_count", sparse_count},
                         {"line_integrals_npy", write_line_integrals},
                         {"split", {split_train, split_val, 1 - split_train - split_val}},
@@ -354,6 +360,7 @@ inline Rng patient_stream(const DatasetOptions& o, const std::string& patient,
 struct PatientVolumes {
   Volume<float> hu;
   Volume<std::uint8_t> label;
+  std::optional<CenterlineTree> tubes;  ///< a phantom's analytic tree (its label's source)
 };
 
 /// Step 1: the phantom built from its seed, or the CT and label files read and their grids
@@ -364,13 +371,35 @@ inline PatientVolumes read_patient(const PatientSource& src) {
     po.seed = *src.phantom_seed;
     po.size = src.phantom_size;
     Phantom p = make_phantom(po);
-    return {volume_cast<float>(p.hu), std::move(p.label)};
+    return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines)};
   }
   GIMM_CHECK_AS(IoError, std::filesystem::exists(src.label),
                 "patient " << src.id << ": label '" << src.label.string() << "' is missing");
-  PatientVolumes v{read_volume<float>(src.image), read_volume<std::uint8_t>(src.label)};
+  PatientVolumes v{read_volume<float>(src.image), read_volume<std::uint8_t>(src.label),
+                   std::nullopt};
   check_same_grid(v.hu.geometry(), v.label.geometry(), "patient " + src.id);
   return v;
+}
+
+/// `--vessels tubes`: one system's branches of the phantom's analytic tree (the labelled
+/// centerlines) and their tube surface (set in `surface`).
+inline CenterlineTree system_tubes(const PatientVolumes& patient, CoronarySystem system,
+                                   const std::string& id,
+                                   std::shared_ptr<const VesselSurface>& surface) {
+  GIMM_CHECK(patient.tubes, "patient " << id
+                                       << ": --vessels tubes needs a phantom patient (its analytic "
+                                          "tree); a CT's vessels are its label (voxel or mesh)");
+  CenterlineTree tree;
+  std::vector<int> index(patient.tubes->branches.size(), -1);
+  for (std::size_t b = 0; b < patient.tubes->branches.size(); ++b) {
+    CenterlineBranch br = patient.tubes->branches[b];
+    if (br.system != system) continue;
+    br.parent = br.parent >= 0 ? index[br.parent] : -1;
+    index[b] = static_cast<int>(tree.branches.size());
+    tree.branches.push_back(std::move(br));
+  }
+  surface = std::make_shared<const VesselMeshProjector>(tube_mesh(tree, system));
+  return tree;
 }
 
 /// The renderer of one system's views: its injection (voxel mode) or its vessel surface (mesh
@@ -380,7 +409,8 @@ inline PatientVolumes read_patient(const PatientSource& src) {
 inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::uint8_t>& mask,
                                     const DatasetOptions& o, const std::string& patient,
                                     const DenseTissue* dense,
-                                    const IodineContrast* iodine = nullptr) {
+                                    const IodineContrast* iodine = nullptr,
+                                    std::shared_ptr<const VesselSurface> tubes = nullptr) {
   RendererOptions ro;
   ro.recipe.preset = o.preset;
   if (iodine) {
@@ -393,8 +423,8 @@ inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::u
   ro.pad_mm = o.pad_mm;
   ro.projector = o.projector;
   ro.vessels = o.vessel_mode;
-  return ViewRenderer(hu, &mask, ro, "patient " + patient, dense,
-                      o.vessel_mode == VesselMode::mesh ? vessel_surface_from_mask(mask) : nullptr);
+  if (o.vessel_mode == VesselMode::mesh && !tubes) tubes = vessel_surface_from_mask(mask);
+  return ViewRenderer(hu, &mask, ro, "patient " + patient, dense, std::move(tubes));
 }
 
 /// The camera record of one view: the C-arm, its view class and the injected system.
@@ -611,7 +641,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
     SkeletonOptions so;
     so.system = system;
     so.min_spur_mm = o.min_spur_mm;
-    const CenterlineTree tree = extract_centerlines(mask, so, "patient " + src.id);
+    std::shared_ptr<const VesselSurface> tubes;
+    const CenterlineTree tree = o.phantom_tubes
+                                    ? system_tubes(patient, system, src.id, tubes)
+                                    : extract_centerlines(mask, so, "patient " + src.id);
     all.append(tree);
     // Branch indices in the labels refer to centerlines.json (both systems).
     const auto points = flatten_centerlines(all, system);
@@ -626,8 +659,9 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
       Rng rng = patient_stream(o, src.id, std::string("iodine:") + to_string(system));
       iodine = randomize(o.iodine_ranges, rng);
     }
-    const ViewRenderer renderer = system_renderer(
-        patient.hu, mask, o, src.id, dense ? &*dense : nullptr, iodine ? &*iodine : nullptr);
+    const ViewRenderer renderer =
+        system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr,
+                        iodine ? &*iodine : nullptr, std::move(tubes));
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
     std::optional<ViewFormationStage> formation;
     if (o.form_angiogram)
