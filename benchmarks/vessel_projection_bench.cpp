@@ -3,12 +3,15 @@
 // uses) and the Embree mesh path (chord, first hit and overlap through the smoothed surface;
 // --vessels mesh). Counters: mask IoU between the two and mean chord difference (mm) where
 // both see vessel. The mesh is built once (its build time is a separate case); the voxel path
-// both as one call (project_mask) and prepared once per system as the dataset does it.
+// both as one call (project_mask) and prepared once per system as the dataset does it. And the
+// phantom's analytic tubes (--vessels tubes): tube_axes, tube_mesh, and their projection, with
+// the same agreement counters against the voxel path.
 #include <benchmark/benchmark.h>
 
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
+#include "gimm/anatomy/tube_mesh.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/render/drr.hpp"
@@ -19,6 +22,7 @@ namespace {
 struct Scene {
   gimm::Volume<std::uint8_t> lca_box;  // LCA label cropped to its bounding box (+1 voxel)
   gimm::TriangleMesh mesh;
+  gimm::CenterlineTree tree;  // the phantom's analytic tree
 };
 
 const Scene& scene() {
@@ -28,7 +32,8 @@ const Scene& scene() {
     o.size = gimm::PhantomSize::imagecas;
     const auto phantom = gimm::make_phantom(o);
     const auto split = gimm::split_coronary_systems(phantom.label);
-    return Scene{gimm::crop_to_foreground(split.lca, 1), gimm::mesh_from_mask(split.lca)};
+    return Scene{gimm::crop_to_foreground(split.lca, 1), gimm::mesh_from_mask(split.lca),
+                 phantom.centerlines};
   }();
   return s;
 }
@@ -57,9 +62,10 @@ void BM_VoxelMaskPrepared_512(benchmark::State& state) {
   state.counters["empty_blocks"] = empty.empty_fraction();
 }
 
-void BM_MeshProjection_512(benchmark::State& state) {
+/// The mesh path on `mesh`, with its agreement with the voxel path as counters.
+void mesh_projection(benchmark::State& state, const gimm::TriangleMesh& mesh) {
   const auto& s = scene();
-  const gimm::VesselMeshProjector projector(s.mesh);
+  const gimm::VesselMeshProjector projector(mesh);
   const auto cam = camera();
   gimm::VesselProjection p;
   for (auto _ : state) benchmark::DoNotOptimize(p = projector.project(cam));
@@ -74,7 +80,25 @@ void BM_MeshProjection_512(benchmark::State& state) {
   }
   state.counters["mask_iou"] = both / std::max(1.0, either);
   state.counters["chord_diff_mm"] = diff / std::max(1.0, both);
-  state.counters["triangles"] = static_cast<double>(s.mesh.triangles.size());
+  state.counters["triangles"] = static_cast<double>(mesh.triangles.size());
+}
+
+void BM_MeshProjection_512(benchmark::State& state) {
+  mesh_projection(state, scene().mesh);
+}
+
+void BM_TubeProjection_512(benchmark::State& state) {
+  mesh_projection(state, gimm::tube_mesh(gimm::tube_axes(scene().tree), gimm::CoronarySystem::LCA));
+}
+
+/// What --vessels tubes adds per system: the axes, the mesh and its Embree scene.
+void BM_TubeBuild(benchmark::State& state) {
+  const auto& s = scene();
+  for (auto _ : state) {
+    const gimm::VesselMeshProjector projector(
+        gimm::tube_mesh(gimm::tube_axes(s.tree), gimm::CoronarySystem::LCA));
+    benchmark::DoNotOptimize(&projector);
+  }
 }
 
 void BM_MeshBuild(benchmark::State& state) {
@@ -91,4 +115,6 @@ BENCHMARK(BM_VoxelMask_512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_VoxelMaskPrepared_512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MeshProjection_512)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_MeshBuild)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TubeProjection_512)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TubeBuild)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_MAIN();

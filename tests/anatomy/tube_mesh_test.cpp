@@ -1,6 +1,7 @@
 // The analytic tube mesh of a coronary tree (anatomy/tube_mesh.hpp): closed and outward, the
 // tube's volume and chord, one passage where a child leaves its parent, and every centreline
 // point of a phantom's tree inside the imaged vessel.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -32,6 +33,12 @@ std::vector<Eigen::Vector3d> helix(int samples, double radius, double pitch, dou
     p.emplace_back(radius * std::cos(a), radius * std::sin(a), pitch * a / (2 * kPi));
   }
   return p;
+}
+
+CenterlineTree tree_with_one_branch() {
+  CenterlineTree tree;
+  tree.branches.push_back(branch({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, 1, 1));
+  return tree;
 }
 
 }  // namespace
@@ -96,7 +103,8 @@ TEST_CASE("Tube mesh: every centreline point of a phantom images inside its vess
   PhantomOptions po;
   po.seed = 2;
   const Phantom p = make_phantom(po);
-  const TriangleMesh mesh = tube_mesh(p.centerlines, CoronarySystem::LCA);
+  const CenterlineTree axes = tube_axes(p.centerlines);
+  const TriangleMesh mesh = tube_mesh(axes, CoronarySystem::LCA);
   CHECK(mesh.is_closed());
   const VesselMeshProjector projector(mesh);
   CArm carm;
@@ -106,7 +114,7 @@ TEST_CASE("Tube mesh: every centreline point of a phantom images inside its vess
   const Camerad camera = carm.camera();
   const VesselProjection view = projector.project(camera);
   int seen = 0, inside = 0;
-  for (const auto& b : p.centerlines.branches) {
+  for (const auto& b : axes.branches) {
     if (b.system != CoronarySystem::LCA) continue;
     for (const auto& X : b.points) {
       const Eigen::Vector2d uv = camera.project(X).uv;
@@ -120,6 +128,55 @@ TEST_CASE("Tube mesh: every centreline point of a phantom images inside its vess
   INFO(inside << " of " << seen << " centreline points on a vessel pixel");
   REQUIRE(seen > 500);
   CHECK(inside == seen);
+}
+
+TEST_CASE("Tube axes: no bend tighter than the tube, smooth paths kept", "[anatomy][tubes]") {
+  // The minimum over interior samples of (bend radius / tube radius).
+  const auto tightest = [](const CenterlineBranch& b) {
+    double worst = 1e9;
+    for (std::size_t i = 1; i + 1 < b.points.size(); ++i) {
+      const Eigen::Vector3d a = b.points[i] - b.points[i - 1], c = b.points[i + 1] - b.points[i];
+      const double turn = std::acos(std::clamp(a.dot(c) / (a.norm() * c.norm()), -1.0, 1.0));
+      if (turn > 1e-9) worst = std::min(worst, 0.5 * (a.norm() + c.norm()) / turn / b.radii[i]);
+    }
+    return worst;
+  };
+  SECTION("a path that jumps 3 mm and doubles back, as the phantom's RCA where its parts meet") {
+    std::vector<Eigen::Vector3d> path;
+    for (int n = 0; n <= 20; ++n) path.emplace_back(0.5 * n, 0, 0);
+    for (int n = 0; n <= 40; ++n) path.emplace_back(8.0 + 0.5 * n * 0.2, 3.0 + 0.5 * n, 0);
+    CenterlineTree tree;
+    tree.branches.push_back(branch(path, 2.0, 1.2));
+    REQUIRE(tightest(tree.branches[0]) < 1);  // a swept circle would fold there
+    const CenterlineTree axes = tube_axes(tree);
+    const auto& b = axes.branches[0];
+    CHECK(tightest(b) >= 1.25 - 1e-9);
+    CHECK(b.points.front() == path.front());  // the ends stay
+    CHECK(b.points.back().isApprox(path.back()));
+    CHECK(b.radii.front() == Approx(2.0));
+    CHECK(b.radii.back() == Approx(1.2));
+    CHECK(tube_mesh(axes, CoronarySystem::LCA).is_closed());
+  }
+  SECTION("a smooth helix: only resampled") {
+    CenterlineTree tree;
+    tree.branches.push_back(branch(helix(300, 20, 15, 1.5), 1.5, 0.7));
+    const CenterlineTree axes = tube_axes(tree);
+    const auto& in = tree.branches[0].points;
+    double far = 0;
+    for (const auto& q : axes.branches[0].points) {
+      double nearest = 1e9;
+      for (std::size_t i = 1; i < in.size(); ++i) {
+        const Eigen::Vector3d ab = in[i] - in[i - 1];
+        const double t = std::clamp((q - in[i - 1]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+        nearest = std::min(nearest, (q - (in[i - 1] + t * ab)).norm());
+      }
+      far = std::max(far, nearest);
+    }
+    CHECK(far < 1e-9);
+    CHECK(tube_axes(tree, 0.25).branches[0].points.size() >
+          1.9 * axes.branches[0].points.size() - 4);
+  }
+  CHECK_THROWS_WITH(tube_axes(tree_with_one_branch(), 0), Catch::Contains("step_mm must be > 0"));
 }
 
 TEST_CASE("Tube mesh: bad input is named", "[anatomy][tubes]") {

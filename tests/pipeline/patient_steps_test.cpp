@@ -221,6 +221,7 @@ TEST_CASE("Patient steps: --vessels tubes images and labels the phantom's own tu
   REQUIRE(patient.tubes);
   REQUIRE(patient.tubes->branches.size() == p.centerlines.branches.size());
   CHECK(patient.tubes->branches[0].points == p.centerlines.branches[0].points);
+  const CenterlineTree axes = tube_axes(*patient.tubes);
 
   std::shared_ptr<const VesselSurface> surface;
   const CenterlineTree tree = system_tubes(patient, CoronarySystem::LCA, "ph5", surface);
@@ -229,7 +230,11 @@ TEST_CASE("Patient steps: --vessels tubes images and labels the phantom's own tu
   std::size_t lca = 0;
   for (const auto& b : p.centerlines.branches) lca += b.system == CoronarySystem::LCA;
   CHECK(tree.branches.size() == lca);
-  for (const auto& b : tree.branches) CHECK(b.system == CoronarySystem::LCA);
+  for (std::size_t b = 0, a = 0; b < tree.branches.size(); ++b, ++a) {
+    CHECK(tree.branches[b].system == CoronarySystem::LCA);
+    while (axes.branches[a].system != CoronarySystem::LCA) ++a;
+    CHECK(tree.branches[b].points == axes.branches[a].points);  // the labelled axes are the tubes'
+  }
 
   // Rendered with the tubes, every in-image centreline point lies on its vessel's mask.
   DatasetOptions o;

@@ -381,18 +381,19 @@ inline PatientVolumes read_patient(const PatientSource& src) {
   return v;
 }
 
-/// `--vessels tubes`: one system's branches of the phantom's analytic tree (the labelled
-/// centerlines) and their tube surface (set in `surface`).
+/// `--vessels tubes`: one system's branches of the phantom's analytic tree, as tube_axes (the
+/// labelled centerlines), and their tube surface (set in `surface`).
 inline CenterlineTree system_tubes(const PatientVolumes& patient, CoronarySystem system,
                                    const std::string& id,
                                    std::shared_ptr<const VesselSurface>& surface) {
   GIMM_CHECK(patient.tubes, "patient " << id
                                        << ": --vessels tubes needs a phantom patient (its analytic "
                                           "tree); a CT's vessels are its label (voxel or mesh)");
+  const CenterlineTree axes = tube_axes(*patient.tubes);
   CenterlineTree tree;
-  std::vector<int> index(patient.tubes->branches.size(), -1);
-  for (std::size_t b = 0; b < patient.tubes->branches.size(); ++b) {
-    CenterlineBranch br = patient.tubes->branches[b];
+  std::vector<int> index(axes.branches.size(), -1);
+  for (std::size_t b = 0; b < axes.branches.size(); ++b) {
+    CenterlineBranch br = axes.branches[b];
     if (br.system != system) continue;
     br.parent = br.parent >= 0 ? index[br.parent] : -1;
     index[b] = static_cast<int>(tree.branches.size());

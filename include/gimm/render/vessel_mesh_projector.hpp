@@ -14,6 +14,8 @@
 #include <embree3/rtcore.h>
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -45,8 +47,10 @@ class VesselMeshProjector final : public VesselSurface {
     GIMM_CHECK(device_ != nullptr, "VesselMeshProjector: Embree device creation failed (error "
                                        << rtcGetDeviceError(nullptr) << ")");
     scene_.reset(rtcNewScene(device_.get()));
-    rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST);  // watertight: no rays slip through
+    // Robust: watertight, no ray slips through an edge. Context filter: trace() gathers hits.
+    rtcSetSceneFlags(scene_.get(), RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     attach_triangles(mesh);
+    triangles_ = mesh.triangles;
     rtcCommitScene(scene_.get());
     GIMM_CHECK(rtcGetDeviceError(device_.get()) == RTC_ERROR_NONE,
                "VesselMeshProjector: Embree scene build failed");
@@ -58,44 +62,50 @@ class VesselMeshProjector final : public VesselSurface {
 
   /// Traces one world ray (unit direction, s in mm from its origin, s >= 0), up to
   /// `max_distance` mm (a passage still open there counts up to that point).
+  /// One traversal gathers every crossing (an intersection filter that records and rejects
+  /// each hit); crossings are sorted, and a crossing reported twice - through an edge or
+  /// vertex shared by two triangles, the same facing within 1 um - is counted once. Stepping
+  /// past each hit instead skipped distinct crossings closer than the step: where a branch
+  /// leaves its parent two walls are crossed 0.8 um apart (tube meshes), and a lost exit left
+  /// the ray "inside" to the end (chord 0).
   MeshRayResult trace(const Ray<double>& ray,
                       double max_distance = std::numeric_limits<double>::infinity()) const {
+    thread_local std::vector<Crossing> crossings;
+    crossings.clear();
+    Collector collector;
+    rtcInitIntersectContext(&collector.context);
+    collector.context.filter = &Collector::collect;
+    collector.crossings = &crossings;
+    RTCRayHit hit{};
+    hit.ray.org_x = static_cast<float>(ray.origin.x());
+    hit.ray.org_y = static_cast<float>(ray.origin.y());
+    hit.ray.org_z = static_cast<float>(ray.origin.z());
+    hit.ray.dir_x = static_cast<float>(ray.direction.x());
+    hit.ray.dir_y = static_cast<float>(ray.direction.y());
+    hit.ray.dir_z = static_cast<float>(ray.direction.z());
+    hit.ray.tnear = 0.0f;
+    hit.ray.tfar = static_cast<float>(std::min(max_distance, 1e30));
+    hit.ray.mask = 0xFFFFFFFFu;
+    hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_.get(), &collector.context, &hit);  // every hit is rejected: none left
+    std::sort(crossings.begin(), crossings.end(),
+              [](const Crossing& x, const Crossing& y) { return x.t < y.t; });
     MeshRayResult out;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    double s = 0.0, inside_since = 0.0;
     int depth = 0;
-    for (int guard = 0; guard < 4096; ++guard) {
-      RTCRayHit hit{};
-      hit.ray.org_x = static_cast<float>(ray.origin.x());
-      hit.ray.org_y = static_cast<float>(ray.origin.y());
-      hit.ray.org_z = static_cast<float>(ray.origin.z());
-      hit.ray.dir_x = static_cast<float>(ray.direction.x());
-      hit.ray.dir_y = static_cast<float>(ray.direction.y());
-      hit.ray.dir_z = static_cast<float>(ray.direction.z());
-      hit.ray.tnear = static_cast<float>(s);
-      hit.ray.tfar = static_cast<float>(max_distance);
-      hit.ray.mask = 0xFFFFFFFFu;
-      hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(scene_.get(), &context, &hit);
-      if (hit.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-      const double t = hit.ray.tfar;
-      const double facing = hit.hit.Ng_x * ray.direction.x() + hit.hit.Ng_y * ray.direction.y() +
-                            hit.hit.Ng_z * ray.direction.z();
-      if (!std::isfinite(out.first_hit_mm) || t < out.first_hit_mm)
-        out.first_hit_mm = std::min(out.first_hit_mm, static_cast<float>(t));
+    double inside_since = 0.0;
+    for (std::size_t c = 0; c < crossings.size(); ++c) {
+      if (repeats_earlier(crossings, c)) continue;
+      const Crossing& x = crossings[c];
+      out.first_hit_mm = std::min(out.first_hit_mm, static_cast<float>(x.t));
       // Embree's Ng follows the right-hand rule of (v0, v1, v2): outward for our meshes.
-      if (facing < 0) {
+      if (x.facing < 0) {
         if (depth++ == 0) {
-          inside_since = t;
+          inside_since = x.t;
           if (out.passages < 255) ++out.passages;
         }
-      } else if (facing > 0 && depth > 0) {
-        if (--depth == 0) out.chord_mm += static_cast<float>(t - inside_since);
+      } else if (x.facing > 0 && depth > 0) {
+        if (--depth == 0) out.chord_mm += static_cast<float>(x.t - inside_since);
       }
-      // Next query starts just past this hit (relative step: float precision of t).
-      s = t + std::max(1e-4, 1e-6 * t);
-      if (s >= max_distance) break;
     }
     if (depth > 0 && std::isfinite(max_distance))
       out.chord_mm += static_cast<float>(max_distance - inside_since);
@@ -130,6 +140,44 @@ class VesselMeshProjector final : public VesselSurface {
   }
 
  private:
+  struct Crossing {
+    double t;
+    double facing;  ///< geometric normal . ray direction: < 0 entering, > 0 leaving
+    unsigned triangle;
+  };
+
+  /// An intersect context that records every candidate hit and rejects it, so Embree goes on.
+  struct Collector {
+    RTCIntersectContext context;  // first: Embree passes a pointer to it back to `collect`
+    std::vector<Crossing>* crossings = nullptr;
+    static void collect(const RTCFilterFunctionNArguments* args) {
+      const auto* self = reinterpret_cast<const Collector*>(args->context);
+      const RTCRay ray = rtcGetRayFromRayN(args->ray, args->N, 0);
+      const RTCHit h = rtcGetHitFromHitN(args->hit, args->N, 0);
+      self->crossings->push_back(
+          {static_cast<double>(ray.tfar),
+           double(h.Ng_x) * ray.dir_x + double(h.Ng_y) * ray.dir_y + double(h.Ng_z) * ray.dir_z,
+           h.primID});
+      args->valid[0] = 0;
+    }
+  };
+
+  /// Whether crossing c is one already counted: an earlier one within 1 um, facing the same
+  /// way, on a triangle sharing a vertex with c's (the ray went through their edge or vertex).
+  bool repeats_earlier(const std::vector<Crossing>& crossings, std::size_t c) const {
+    const Crossing& x = crossings[c];
+    for (std::size_t e = c; e-- > 0 && x.t - crossings[e].t < 1e-3;) {
+      const Crossing& y = crossings[e];
+      if ((y.facing < 0) != (x.facing < 0)) continue;
+      const auto& a = triangles_[x.triangle];
+      const auto& b = triangles_[y.triangle];
+      for (const auto va : a)
+        for (const auto vb : b)
+          if (va == vb) return true;
+    }
+    return false;
+  }
+
   static void check_mesh(const TriangleMesh& mesh) {
     GIMM_CHECK(!mesh.triangles.empty(), "VesselMeshProjector: the vessel mesh is empty");
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
@@ -172,6 +220,7 @@ class VesselMeshProjector final : public VesselSurface {
   };
   std::unique_ptr<RTCDeviceTy, DeviceRelease> device_;
   std::unique_ptr<RTCSceneTy, SceneRelease> scene_;
+  std::vector<std::array<std::uint32_t, 3>> triangles_;  ///< to tell a repeated crossing
 };
 
 /// The Embree surface of a binary vessel mask (mesh_from_mask with its defaults), for
