@@ -86,10 +86,14 @@ TEST_CASE("Formation stage: new files and an iodine lumen, labels unchanged",
               json r = b["formation"];
               r.erase("png");
               r.erase("iodine");
+              r.erase("catheter");
               return r;
             }(),
             name);
         CHECK(f.scatter_to_primary >= 0.3);
+        // The system's catheter, imaged or not, recorded with every view.
+        REQUIRE(b["formation"].contains("catheter"));
+        CHECK(b["formation"]["catheter"]["present"].is_boolean());
         // The system's injection, drawn from the iodine ranges: a lumen far denser than the
         // recipe's fixed 3000 HU (about 0.2 / mm against blood's 0.02 / mm).
         const IodineContrast iodine = iodine_contrast_from_json(
@@ -155,4 +159,63 @@ TEST_CASE("Formation stage: new files and an iodine lumen, labels unchanged",
         files_under(DatasetLayout(again_out).patient_dir(src.id)).size());
   const auto again = files_under(DatasetLayout(again_out).patient_dir(src.id));
   for (const auto& name : extra) CHECK(again.at(name) == formed.at(name));
+}
+
+TEST_CASE("Formation stage: the guiding catheter darkens its own path and nothing else",
+          "[pipeline][formation][catheter]") {
+  const PatientVolumes patient = read_patient(phantom_sources(1, 4, PhantomSize::small)[0]);
+  REQUIRE(patient.anatomy);
+  DatasetOptions o;
+  o.carm.rows = o.carm.cols = 256;
+  o.carm.pixel_mm = 1.0;
+  o.catheter_probability = 1;
+  ViewFormationStage plain{o.formation_ranges, Rng(5), IodineContrast{}};
+  ViewFormationStage with = plain;
+  add_catheter(with, patient, CoronarySystem::LCA, o, "p");
+  REQUIRE(with.catheter);
+  CHECK(with.catheter_record["present"] == true);
+  CHECK(with.catheter_mu_per_mm > 0.2);  // 350 mgI/mL over blood: about 0.36 mm^-1 at 55 keV
+  // A bare view of the phantom's line integrals (a water slab is enough for the stage).
+  CArm carm = o.carm;
+  carm.primary_deg = 40;
+  carm.secondary_deg = 20;
+  carm.isocenter = vessel_isocenter(split_coronary_systems(patient.label).lca);
+  RenderedView view;
+  view.line_integrals = Image<float>(256, 256, 4.0f);
+  json cj_plain, cj_with;
+  const FormedAngiogram a = form_view(view, carm, plain, 0, cj_plain);
+  const FormedAngiogram b = form_view(view, carm, with, 0, cj_with);
+  CHECK(cj_plain["formation"]["catheter"]["present"] == false);
+  CHECK(cj_with["formation"]["catheter"]["present"] == true);
+  // In the line integrals: exactly its chord times its attenuation, nothing elsewhere.
+  const Camerad camera = carm.camera();
+  const VesselProjection cath = with.catheter->project(camera);
+  const Image<float> added = with_catheter(view.line_integrals, with, camera);
+  std::size_t on_path = 0, wrong = 0;
+  for (std::size_t p = 0; p < added.size(); ++p) {
+    const double expected = 4.0 + with.catheter_mu_per_mm * cath.chord_mm.data()[p];
+    on_path += cath.chord_mm.data()[p] > 0.5f;
+    wrong += std::abs(added.data()[p] - expected) > 1e-5;
+  }
+  CHECK(on_path > 100);
+  CHECK(wrong == 0);
+  CHECK(with_catheter(view.line_integrals, plain, camera).storage() ==
+        view.line_integrals.storage());
+  // And the formed view shows it: darker on its path than the same view without it.
+  double along = 0, without = 0;
+  std::size_t n = 0;
+  for (std::size_t p = 0; p < a.display.size(); ++p)
+    if (cath.chord_mm.data()[p] > 1.2f)
+      along += b.display.data()[p], without += a.display.data()[p], ++n;
+  REQUIRE(n > 50);
+  INFO("mean display on the catheter " << along / n << ", without it " << without / n);
+  CHECK(along / n < without / n - 0.05);
+  // Without a phantom's anatomy (a CT) there is no catheter.
+  PatientVolumes ct{patient.hu, patient.label, std::nullopt, std::nullopt};
+  ViewFormationStage none = plain;
+  add_catheter(none, ct, CoronarySystem::LCA, o, "ct");
+  CHECK_FALSE(none.catheter);
+  o.catheter_probability = 1.5;
+  CHECK_THROWS_WITH(add_catheter(none, patient, CoronarySystem::LCA, o, "p"),
+                    Catch::Contains("catheter_probability must be in [0, 1], got 1.5"));
 }

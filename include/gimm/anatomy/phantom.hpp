@@ -122,6 +122,10 @@ struct PhantomAnatomy {
   Dominance dominance = Dominance::right;
   double lumen_hu = 400;
   Eigen::Vector2d body_axis{-25, 25};  ///< x, y of the chest's axis, mm
+  /// The aorta's centreline from the root over the arch down the descending aorta (a
+  /// polyline, mm), and its radius there: ascending 14 mm, descending 11.5 mm.
+  std::vector<Eigen::Vector3d> aorta_path;
+  std::vector<double> aorta_radius_mm;
   /// The chest's landmarks (PhantomSize::chest; NaN at the other sizes): the top of the left
   /// and right diaphragm domes and of T1, mm.
   double left_dome_z = std::numeric_limits<double>::quiet_NaN();
@@ -415,6 +419,10 @@ inline Phantom make_phantom(const PhantomOptions& options) {
                         Vector3d(cx + 10, cy + 25, arch_top.z() + 14), arch_back},
                        T.aortic_radius};
   T.aorta_descending = {{arch_back, Vector3d(cx + 24, cy + 48, -200)}, 11.5};
+  A.aorta_path = T.aorta_ascending.points;
+  A.aorta_radius_mm.assign(A.aorta_path.size(), T.aortic_radius);
+  A.aorta_path.push_back(T.aorta_descending.points.back());
+  A.aorta_radius_mm.push_back(11.5);
   const Vector3d rvot = frame.surface(-4, -25, -12);
   T.pulmonary = {{rvot, rvot + Vector3d(6, 4, 30), rvot + Vector3d(12, 25, 45)}, 12};
   // The SVC comes down on the patient's right of the ascending aorta into the top of the RA.

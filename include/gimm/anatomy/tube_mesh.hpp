@@ -117,6 +117,29 @@ inline void append_tube(const CenterlineBranch& br, int sides, TriangleMesh& mes
 
 }  // namespace detail
 
+namespace detail {
+
+/// Moves each interior sample where the path bends tighter than max(1.25 radius, min_bend_mm)
+/// to its neighbours' mean, round after round (at most max_rounds) until none is; the ends stay.
+inline void relax_bends(std::vector<Eigen::Vector3d>& points, const std::vector<double>& radii,
+                        double min_bend_mm, int max_rounds) {
+  for (int round = 0; round < max_rounds; ++round) {
+    bool moved = false;
+    for (std::size_t i = 1; i + 1 < points.size(); ++i) {
+      const Eigen::Vector3d a = points[i] - points[i - 1], c = points[i + 1] - points[i];
+      const double cos_turn = a.dot(c) / std::max(1e-12, a.norm() * c.norm());
+      const double turn = std::acos(std::clamp(cos_turn, -1.0, 1.0));
+      const double bend_radius = 0.5 * (a.norm() + c.norm()) / std::max(1e-12, turn);
+      if (bend_radius >= std::max(1.25 * radii[i], min_bend_mm)) continue;
+      points[i] = 0.5 * (points[i - 1] + points[i + 1]);
+      moved = true;
+    }
+    if (!moved) return;
+  }
+}
+
+}  // namespace detail
+
 /// The axes a tube mesh can follow without folding: each branch resampled every `step_mm` of
 /// arc length (radii interpolated), then relaxed where it bends tighter than its own radius
 /// (a swept circle folds over itself on the inside of a bend whose radius of curvature is
@@ -147,20 +170,7 @@ inline CenterlineTree tube_axes(const CenterlineTree& tree, double step_mm = 0.5
       points.push_back(b.points[seg - 1] + t * (b.points[seg] - b.points[seg - 1]));
       radii.push_back(b.radii[seg - 1] + t * (b.radii[seg] - b.radii[seg - 1]));
     }
-    // Relax the bends tighter than the tube.
-    for (int round = 0; round < 200; ++round) {
-      bool moved = false;
-      for (std::size_t i = 1; i + 1 < points.size(); ++i) {
-        const Eigen::Vector3d a = points[i] - points[i - 1], c = points[i + 1] - points[i];
-        const double cos_turn = a.dot(c) / std::max(1e-12, a.norm() * c.norm());
-        const double turn = std::acos(std::clamp(cos_turn, -1.0, 1.0));
-        const double bend_radius = 0.5 * (a.norm() + c.norm()) / std::max(1e-12, turn);
-        if (bend_radius >= 1.25 * radii[i]) continue;
-        points[i] = 0.5 * (points[i - 1] + points[i + 1]);
-        moved = true;
-      }
-      if (!moved) break;
-    }
+    detail::relax_bends(points, radii, 0.0, 200);
     b.points = std::move(points);
     b.radii = std::move(radii);
   }

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "gimm/anatomy/attenuation.hpp"
+#include "gimm/anatomy/catheter.hpp"
 #include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/isocenter.hpp"
@@ -79,6 +80,10 @@ struct DatasetOptions {
   /// recipe's fixed lumen_hu: one contrast drawn per patient and system from these ranges, so
   /// vessel contrast follows from the concentration and the beam's energy.
   IodineContrastRanges iodine_ranges;
+  /// With form_angiogram, phantoms only: the share of systems imaged with their guiding
+  /// catheter (anatomy/catheter.hpp), [0, 1], and the contrast it holds (undiluted, mgI/mL).
+  double catheter_probability = 0.9;
+  double catheter_iodine_mg_per_ml = 350;
   double split_train = 0.70, split_val = 0.15;  ///< the rest is test
   double min_spur_mm = 3.0;
   /// A label with one tree only: make the system it is assigned to (split_coronary_systems'
@@ -123,7 +128,10 @@ struct DatasetOptions {
           {"iodine_ranges",
            {{"iodine_mg_per_ml",
              {iodine_ranges.iodine_mg_per_ml.lo, iodine_ranges.iodine_mg_per_ml.hi}},
-            {"effective_kev", {iodine_ranges.effective_kev.lo, iodine_ranges.effective_kev.hi}}}}};
+            {"effective_kev", {iodine_ranges.effective_kev.lo, iodine_ranges.effective_kev.hi}}}},
+          {"catheter",
+           {{"probability", catheter_probability},
+            {"iodine_mg_per_ml", catheter_iodine_mg_per_ml}}}};
     return j;
   }
 };
@@ -360,7 +368,8 @@ inline Rng patient_stream(const DatasetOptions& o, const std::string& patient,
 struct PatientVolumes {
   Volume<float> hu;
   Volume<std::uint8_t> label;
-  std::optional<CenterlineTree> tubes;  ///< a phantom's analytic tree (its label's source)
+  std::optional<CenterlineTree> tubes;    ///< a phantom's analytic tree (its label's source)
+  std::optional<PhantomAnatomy> anatomy;  ///< a phantom's seeded anatomy (its aorta, ...)
 };
 
 /// Step 1: the phantom built from its seed, or the CT and label files read and their grids
@@ -371,12 +380,13 @@ inline PatientVolumes read_patient(const PatientSource& src) {
     po.seed = *src.phantom_seed;
     po.size = src.phantom_size;
     Phantom p = make_phantom(po);
-    return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines)};
+    return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines),
+            std::move(p.anatomy)};
   }
   GIMM_CHECK_AS(IoError, std::filesystem::exists(src.label),
                 "patient " << src.id << ": label '" << src.label.string() << "' is missing");
   PatientVolumes v{read_volume<float>(src.image), read_volume<std::uint8_t>(src.label),
-                   std::nullopt};
+                   std::nullopt, std::nullopt};
   check_same_grid(v.hu.geometry(), v.label.geometry(), "patient " + src.id);
   return v;
 }
@@ -450,10 +460,51 @@ inline nlohmann::json intensity_window_json(const IntensityWindow& w) {
 /// from, and the system's stream (view v draws from stream.fork(v): the views' formations are
 /// independent of each other and of every other random choice of the patient).
 struct ViewFormationStage {
+  ViewFormationStage(AngiogramFormationRanges r, Rng s, IodineContrast i)
+      : ranges(std::move(r)), stream(s), iodine(i) {}
   AngiogramFormationRanges ranges;
   Rng stream;
   IodineContrast iodine;  ///< the system's injection, recorded with each view
+  /// The system's guiding catheter, when imaged: its surface, the attenuation its contrast
+  /// adds over the blood it displaces (mm^-1), and its record for each view.
+  std::shared_ptr<const VesselSurface> catheter;
+  double catheter_mu_per_mm = 0;
+  nlohmann::json catheter_record = {{"present", false}};
 };
+
+/// The system's catheter for `stage` (phantoms with form_angiogram): present with
+/// o.catheter_probability, from the stream "catheter:<SYS>".
+inline void add_catheter(ViewFormationStage& stage, const PatientVolumes& patient,
+                         CoronarySystem system, const DatasetOptions& o, const std::string& id) {
+  GIMM_CHECK(std::isfinite(o.catheter_probability) && o.catheter_probability >= 0 &&
+                 o.catheter_probability <= 1,
+             "dataset: catheter_probability must be in [0, 1], got " << o.catheter_probability);
+  if (!patient.anatomy || !patient.tubes) return;  // a CT: no catheter is modelled
+  Rng rng = patient_stream(o, id, std::string("catheter:") + to_string(system));
+  if (rng.uniform() >= o.catheter_probability) return;
+  CatheterOptions co;
+  CenterlineTree one;
+  one.branches.push_back(guiding_catheter(*patient.anatomy, *patient.tubes, system, rng, co));
+  stage.catheter = std::make_shared<const VesselMeshProjector>(tube_mesh(one, system));
+  const IodineContrast column{o.catheter_iodine_mg_per_ml, stage.iodine.effective_kev};
+  stage.catheter_mu_per_mm = column.lumen_mu_per_mm() - column.blood_mu_per_mm();
+  stage.catheter_record = {{"present", true},
+                           {"lumen_radius_mm", co.lumen_radius_mm},
+                           {"iodine_mg_per_ml", o.catheter_iodine_mg_per_ml},
+                           {"mu_per_mm", stage.catheter_mu_per_mm}};
+}
+
+/// A view's line integrals with the stage's catheter added (its chord times its attenuation):
+/// imaged, not labelled, so masks and points stay the vessels' alone.
+inline Image<float> with_catheter(Image<float> line_integrals, const ViewFormationStage& stage,
+                                  const Camerad& camera) {
+  if (!stage.catheter) return line_integrals;
+  const VesselProjection catheter = stage.catheter->project(camera);
+  for (std::size_t p = 0; p < line_integrals.size(); ++p)
+    line_integrals.data()[p] +=
+        static_cast<float>(stage.catheter_mu_per_mm * catheter.chord_mm.data()[p]);
+  return line_integrals;
+}
 
 /// The formation stage of one view: its drawn parameters go to the camera record `cj`, the
 /// formed image and field mask are returned.
@@ -465,10 +516,12 @@ inline FormedAngiogram form_view(const RenderedView& view, const CArm& carm,
                  << stage.ranges.bits);
   Rng rng = stage.stream.fork(v);
   const AngiogramFormation f = randomize(stage.ranges, rng);
-  FormedAngiogram formed = form_angiogram(view.line_integrals, carm.pixel_mm, f, rng);
+  FormedAngiogram formed = form_angiogram(with_catheter(view.line_integrals, stage, carm.camera()),
+                                          carm.pixel_mm, f, rng);
   cj["formation"] = to_json(f);
   cj["formation"]["iodine"] = to_json(stage.iodine);
   cj["formation"]["iodine"]["lumen_hu"] = stage.iodine.lumen_hu();
+  cj["formation"]["catheter"] = stage.catheter_record;
   cj["formation"]["png"] =
       "formed.png: display = value / (2^bits - 1), bright background, "
       "dark vessels; field.png: 255 = exposed";
@@ -665,10 +718,12 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
                         iodine ? &*iodine : nullptr, std::move(tubes));
     (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
     std::optional<ViewFormationStage> formation;
-    if (o.form_angiogram)
-      formation = ViewFormationStage{
-          o.formation_ranges,
-          patient_stream(o, src.id, std::string("formation:") + to_string(system)), *iodine};
+    if (o.form_angiogram) {
+      formation.emplace(o.formation_ranges,
+                        patient_stream(o, src.id, std::string("formation:") + to_string(system)),
+                        *iodine);
+      add_catheter(*formation, patient, system, o, src.id);
+    }
     const SystemViews views = render_system_views(
         renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id), points, writer, src.id,
         o.write_line_integrals, t, formation ? &*formation : nullptr);
