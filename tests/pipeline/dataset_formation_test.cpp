@@ -176,7 +176,9 @@ TEST_CASE("Formation stage: the guiding catheter darkens its own path and nothin
   CHECK(with.catheter_record["present"] == true);
   CHECK(with.catheter_mu_per_mm > 0.2);  // 350 mgI/mL over blood: about 0.36 mm^-1 at 55 keV
   // A bare view of the phantom's line integrals (a water slab is enough for the stage).
-  CArm carm = o.carm;
+  CArm carm;  // o.carm's values (a copy of its empty optional warns with GCC 12 -O2)
+  carm.rows = carm.cols = 256;
+  carm.pixel_mm = 1.0;
   carm.primary_deg = 40;
   carm.secondary_deg = 20;
   carm.isocenter = vessel_isocenter(split_coronary_systems(patient.label).lca);

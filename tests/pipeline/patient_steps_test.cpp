@@ -246,7 +246,9 @@ TEST_CASE("Patient steps: --vessels tubes images and labels the phantom's own tu
   const DenseTissue dense = classify_dense_tissue(patient.hu, ContrastRecipe{});
   const ViewRenderer renderer =
       system_renderer(patient.hu, split.lca, o, "ph5", &dense, nullptr, surface);
-  CArm carm = o.carm;
+  CArm carm;  // o.carm's values (a copy of its empty optional warns with GCC 12 -O2)
+  carm.rows = carm.cols = 256;
+  carm.pixel_mm = 1.0;
   carm.primary_deg = -30;
   carm.secondary_deg = 25;
   carm.isocenter = vessel_isocenter(split.lca);
