@@ -160,6 +160,24 @@ TEST_CASE("NIfTI reader takes the qform when there is no sform, pixdim when neit
   v = gimm::read_nifti<float>(p);
   CHECK((v.direction() - lh.direction).norm() < 1e-6);
 
+  // A quaternion that is no rotation (b^2 + c^2 + d^2 > 1) is refused, naming the values;
+  // float rounding of a unit one (a = 0, b^2 + c^2 + d^2 = 1 + 1e-6) is not.
+  auto bad = bytes;
+  patch<float>(bad, 256, 0.7f);
+  patch<float>(bad, 260, 0.7f);
+  patch<float>(bad, 264, 0.7f);
+  const auto pbad = tmp_path("qform_not_rotation.nii");
+  write_bytes(pbad, bad);
+  CHECK_THROWS_WITH(
+      gimm::read_nifti<float>(pbad),
+      Catch::Contains("qform_not_rotation.nii") && Catch::Contains("(b, c, d) = (0.7, 0.7, 0.7)") &&
+          Catch::Contains("b^2 + c^2 + d^2 = 1.47") && Catch::Contains("not a rotation"));
+  patch<float>(bad, 256, 0.0f);
+  patch<float>(bad, 260, 0.0f);
+  patch<float>(bad, 264, 1.000001f);
+  write_bytes(pbad, bad);
+  CHECK_NOTHROW(gimm::read_nifti<float>(pbad));
+
   patch<std::int16_t>(bytes, 252, 0);  // qform_code = 0 too -> pixdim only, RAS axes
   write_bytes(p, bytes);
   v = gimm::read_nifti<float>(p);

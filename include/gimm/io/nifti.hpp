@@ -163,8 +163,16 @@ inline Eigen::Matrix<double, 3, 4> nifti_affine(const HeaderFields& h, const std
   } else if (qform_code > 0) {
     const float qfac_raw = h.get<float>(76);
     const double qfac = qfac_raw < 0 ? -1.0 : 1.0;  // 0 means 1, by the standard
-    const Eigen::Matrix3d R =
-        nifti_quaternion_to_rotation(h.get<float>(256), h.get<float>(260), h.get<float>(264));
+    const double b = h.get<float>(256), c = h.get<float>(260), d = h.get<float>(264);
+    // (b, c, d) is the vector part of a unit quaternion, a = sqrt(1 - b^2 - c^2 - d^2). Past
+    // float rounding (a unit quaternion stored as float32 reaches 1 + 1e-6) it is no rotation:
+    // niftilib rescales it silently; guessing the patient's orientation is refused instead.
+    const double norm2 = b * b + c * c + d * d;
+    GIMM_CHECK_AS(FormatError, std::isfinite(norm2) && norm2 <= 1 + 1e-4,
+                  "'" << what << "': the qform quaternion (b, c, d) = (" << b << ", " << c << ", "
+                      << d << ") has b^2 + c^2 + d^2 = " << norm2
+                      << " > 1: not a rotation (the file's orientation is corrupt)");
+    const Eigen::Matrix3d R = nifti_quaternion_to_rotation(b, c, d);
     A.leftCols<3>() = R * Eigen::Vector3d(pixdim.x(), pixdim.y(), qfac * pixdim.z()).asDiagonal();
     A.col(3) = Eigen::Vector3d(h.get<float>(268), h.get<float>(272), h.get<float>(276));
     source = "qform";
