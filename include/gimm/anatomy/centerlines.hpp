@@ -4,6 +4,7 @@
 /// phantom produces them analytically (ground truth); anatomy/skeleton.hpp extracts them from
 /// a mask. Every later stage (labels, metrics) works on this one representation.
 #include <Eigen/Core>
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,6 +13,20 @@
 #include "gimm/core/error.hpp"
 
 namespace gimm {
+
+namespace detail {
+
+/// Distance from p to the segment [a, b] and the parameter (0..1) of the closest point.
+inline double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b, double* t_out = nullptr) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  if (t_out) *t_out = t;
+  return (p - (a + t * ab)).norm();
+}
+
+}  // namespace detail
 
 struct CenterlineBranch {
   std::string name;  ///< e.g. "LAD", "D1", "RCA", "PDA"

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "gimm/anatomy/centerlines.hpp"
 #include "gimm/core/rng.hpp"
 
 namespace gimm {
@@ -62,14 +63,6 @@ inline double value_noise(const Eigen::Vector3d& p, double cell, std::uint64_t s
     v += weight * lattice(i + di, j + dj, k + dk);
   }
   return v;
-}
-
-/// Distance from p to the segment [a, b].
-inline double capsule_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                               const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-  return (p - (a + t * ab)).norm();
 }
 
 }  // namespace detail
@@ -196,9 +189,9 @@ class ChestModel {
     const Eigen::Vector3d spinous_tip = canal + Eigen::Vector3d(0, 26, -24);
     const Eigen::Vector3d left_tip = canal + Eigen::Vector3d(30, 6, 2),
                           right_tip = canal + Eigen::Vector3d(-30, 6, 2);
-    const double process = std::min({arch, detail::capsule_distance(p, canal, spinous_tip) - 4.5,
-                                     detail::capsule_distance(p, canal, left_tip) - 5.5,
-                                     detail::capsule_distance(p, canal, right_tip) - 5.5});
+    const double process = std::min({arch, detail::segment_distance(p, canal, spinous_tip) - 4.5,
+                                     detail::segment_distance(p, canal, left_tip) - 5.5,
+                                     detail::segment_distance(p, canal, right_tip) - 5.5});
     return nearer(body, bone_at(process, bone_hu(-process)));
   }
 
@@ -240,8 +233,8 @@ class ChestModel {
     const Eigen::Vector3d medial(c_.x() + side * 22, front, t1_z_ - 20);
     const Eigen::Vector3d middle(c_.x() + side * 80, front - 4, t1_z_ - 8);
     const Eigen::Vector3d lateral(c_.x() + side * 140, front + 40, t1_z_ + 4);
-    const double d = std::min(detail::capsule_distance(p, medial, middle),
-                              detail::capsule_distance(p, middle, lateral)) -
+    const double d = std::min(detail::segment_distance(p, medial, middle),
+                              detail::segment_distance(p, middle, lateral)) -
                      7;
     return bone_at(d, -d < 1.8 ? bone_.cortex : bone_.marrow);
   }

@@ -143,16 +143,6 @@ struct Phantom {
 
 namespace detail {
 
-/// Distance from p to the segment [a, b] and the parameter (0..1) of the closest point.
-inline double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                               const Eigen::Vector3d& b, double* t_out = nullptr) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  if (t_out) *t_out = t;
-  return (p - (a + t * ab)).norm();
-}
-
 /// An ellipsoid with centre and orthonormal axes (columns) and semi-axes.
 struct Ellipsoid {
   Eigen::Vector3d centre;

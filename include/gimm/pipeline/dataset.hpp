@@ -399,16 +399,16 @@ inline CenterlineTree system_tubes(const PatientVolumes& patient, CoronarySystem
   GIMM_CHECK(patient.tubes, "patient " << id
                                        << ": --vessels tubes needs a phantom patient (its analytic "
                                           "tree); a CT's vessels are its label (voxel or mesh)");
-  const CenterlineTree axes = tube_axes(*patient.tubes);
   CenterlineTree tree;
-  std::vector<int> index(axes.branches.size(), -1);
-  for (std::size_t b = 0; b < axes.branches.size(); ++b) {
-    CenterlineBranch br = axes.branches[b];
+  std::vector<int> index(patient.tubes->branches.size(), -1);
+  for (std::size_t b = 0; b < patient.tubes->branches.size(); ++b) {
+    CenterlineBranch br = patient.tubes->branches[b];
     if (br.system != system) continue;
     br.parent = br.parent >= 0 ? index[br.parent] : -1;
     index[b] = static_cast<int>(tree.branches.size());
     tree.branches.push_back(std::move(br));
   }
+  tree = tube_axes(tree);  // this system only: axes are per branch
   surface = std::make_shared<const VesselMeshProjector>(tube_mesh(tree, system));
   return tree;
 }
