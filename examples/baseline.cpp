@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"oracle", "epipolar"}));
   app.add_option("--out", out, "predictions directory")->required();
   app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--seed", seed, "random seed")->capture_default_str();
   app.add_option("--split", split, "all|train|val|test")
       ->check(CLI::IsMember({"all", "train", "val", "test"}))
@@ -34,7 +35,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
-    GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+    GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+    // PRED_DIR is replaced whole: it must not be, or hold, the dataset.
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, {{"--dataset", dataset}}, true);
     std::unique_ptr<gimm::PairMatcher> matcher;
     if (method == "oracle")
       matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);

@@ -37,8 +37,8 @@ int main(int argc, char** argv) {
     if (!dicom.empty()) {
       for (const char* flag : {"--primary", "--secondary", "--sid", "--sod", "--rows", "--cols",
                                "--model", "--routine", "--pair", "--principal-point"})
-        GIMM_CHECK(app.count(flag) == 0,
-                   "--dicom takes its geometry from the file; " << flag << " cannot be given");
+        GIMM_USAGE_CHECK(app.count(flag) == 0, "--dicom takes its geometry from the file; "
+                                                   << flag << " cannot be given");
       gimm::DicomReadOptions read;
       if (app.count("--pixel")) read.pitch_mm = carm.pixel_mm;
       gimm::XaFrame frame = gimm::read_xa_dicom(dicom, read);
@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
       std::cout << j.dump(2) << "\n";
       return 0;
     }
-    GIMM_CHECK(reference.empty() && !explain, "--reference and --explain go with --dicom");
+    GIMM_USAGE_CHECK(reference.empty() && !explain, "--reference and --explain go with --dicom");
     if (!pair.empty()) {
       const auto a = gimm::camera_from_json(gimm::read_json_file(pair[0]), pair[0]);
       const auto b = gimm::camera_from_json(gimm::read_json_file(pair[1]), pair[1]);
@@ -68,8 +68,8 @@ int main(int argc, char** argv) {
       std::cout << out.dump(2) << "\n";
       return 0;
     }
-    GIMM_CHECK(routine || (app.count("--primary") && app.count("--secondary")),
-               "gimm-carm: give --primary and --secondary, or --routine, or --pair");
+    GIMM_USAGE_CHECK(routine || (app.count("--primary") && app.count("--secondary")),
+                     "gimm-carm: give --primary and --secondary, or --routine, or --pair");
     flags.finish(carm);
     if (!routine) {
       std::cout << gimm::to_json(carm).dump(2) << "\n";

@@ -27,15 +27,17 @@ int main(int argc, char** argv) {
   app.add_option("--truth", truth_path, "ground-truth centerlines JSON to compare with")
       ->check(CLI::ExistingFile);
   app.add_option("--tolerance", tolerance, "distance (mm) counted as agreement")
-      ->check(CLI::PositiveNumber)
+      ->check(gimm::cli::Positive)
       ->capture_default_str();
   app.add_option("--min-spur", options.min_spur_mm, "spurs shorter than this (mm) are pruned")
-      ->check(CLI::NonNegativeNumber)
+      ->check(gimm::cli::at_least(0))
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
-    gimm::check_outputs_not_inputs({{"--out", out_path}},
-                                   {{"--label", label_path}, {"--truth", truth_path}});
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out_path}},
+                                          {{"--label", label_path}, {"--truth", truth_path}});
     const auto t0 = std::chrono::steady_clock::now();
+    if (const std::string note = gimm::detached_data_note(label_path); !note.empty())
+      std::cerr << "gimm-centerlines: note: " << note << "\n";
     const auto label = gimm::read_volume<std::uint8_t>(label_path);
     const auto split = gimm::split_coronary_systems(label, {}, label_path);
     const auto t1 = std::chrono::steady_clock::now();

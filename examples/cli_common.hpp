@@ -7,11 +7,13 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/carm.hpp"
+#include "gimm/io/files.hpp"
 #include "gimm/nn/shipped_weights.hpp"
 #include "gimm/version.hpp"
 
@@ -20,6 +22,36 @@
 #endif
 
 namespace gimm::cli {
+
+/// A command line that parsed but asks for something that cannot be (flags that conflict, a
+/// value a flag's owner refuses): a usage error like CLI11's own, exit 2. Its message names
+/// the flag and the value.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Runs `read` (which turns flag values into the library's options) and reports what it
+/// refuses as a usage error of `flags` (e.g. "--shard", "--rows/--cols/--pixel"), exit 2.
+template <class Read>
+auto flag_value(const std::string& flags, Read&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const UsageError&) {
+    throw;
+  } catch (const Error& e) {
+    std::string what = e.what();
+    if (what.rfind("gimm: ", 0) == 0) what.erase(0, 6);
+    throw UsageError("gimm: " + (flags.empty() ? what : flags + ": " + what));
+  }
+}
+
+/// check_outputs_not_inputs (io/files.hpp) as a usage error: an output flag naming an input.
+inline void refuse_outputs_over_inputs(const std::vector<NamedPath>& outputs,
+                                       const std::vector<NamedPath>& inputs,
+                                       bool folders_contain = false) {
+  flag_value("", [&] { check_outputs_not_inputs(outputs, inputs, folders_contain); });
+}
 
 /// Where the shipped weights are looked for, after $GIMM_WEIGHTS: the install tree
 /// (<prefix>/share/gimm/weights beside <prefix>/bin), the source tree this binary was built from.
@@ -43,6 +75,37 @@ inline std::string default_weights() {
   return nn::find_shipped_weights(default_weights_dirs());
 }
 
+/// Refuses a number below `min`, saying so in those words (CLI11's PositiveNumber prints the
+/// double range, 4.9e-324 as 309 digits).
+inline CLI::Validator at_least(double min) {
+  return CLI::Validator(
+      [min](std::string& input) -> std::string {
+        char* end = nullptr;
+        const long double value = std::strtold(input.c_str(), &end);
+        if (end == input.c_str() || *end != '\0') return {};        // not a number: CLI11 says so
+        if (!std::isfinite(static_cast<double>(value))) return {};  // Finite says so
+        if (!(value >= min)) {
+          std::ostringstream os;
+          os << "must be >= " << min << ", got " << input;
+          return os.str();
+        }
+        return {};
+      },
+      "", "AtLeast");
+}
+
+/// Refuses a number that is not above zero ("must be > 0, got -5").
+inline const CLI::Validator Positive(
+    [](std::string& input) -> std::string {
+      char* end = nullptr;
+      const long double value = std::strtold(input.c_str(), &end);
+      if (end == input.c_str() || *end != '\0') return {};
+      if (!std::isfinite(static_cast<double>(value))) return {};  // Finite says so
+      if (!(value > 0)) return "must be > 0, got " + input;
+      return {};
+    },
+    "", "Positive");
+
 /// The C-arm flags shared by gimm-carm and gimm-drr; fills `carm`.
 struct CArmFlags {
   std::string model = "perspective";
@@ -58,11 +121,19 @@ struct CArmFlags {
       primary->required();
       secondary->required();
     }
-    app.add_option("--sid", carm.sid_mm, "source-to-detector distance, mm")->capture_default_str();
-    app.add_option("--sod", carm.sod_mm, "source-to-isocentre distance, mm")->capture_default_str();
-    app.add_option("--rows", carm.rows, "detector rows")->capture_default_str();
-    app.add_option("--cols", carm.cols, "detector columns")->capture_default_str();
-    app.add_option("--pixel", carm.pixel_mm, "detector pixel pitch, mm")->capture_default_str();
+    app.add_option("--sid", carm.sid_mm, "source-to-detector distance, mm")
+        ->check(Positive)
+        ->capture_default_str();
+    app.add_option("--sod", carm.sod_mm, "source-to-isocentre distance, mm")
+        ->check(Positive)
+        ->capture_default_str();
+    app.add_option("--rows", carm.rows, "detector rows")->check(at_least(1))->capture_default_str();
+    app.add_option("--cols", carm.cols, "detector columns")
+        ->check(at_least(1))
+        ->capture_default_str();
+    app.add_option("--pixel", carm.pixel_mm, "detector pixel pitch, mm")
+        ->check(Positive)
+        ->capture_default_str();
     app.add_option("--model", model, "perspective|orthographic")
         ->check(CLI::IsMember({"perspective", "orthographic"}))
         ->capture_default_str();
@@ -83,7 +154,8 @@ struct CArmFlags {
     if (!principal_point.empty())
       carm.principal_point = Eigen::Vector2d(principal_point[0], principal_point[1]);
     if (!table.empty()) carm.table_mm = {table[0], table[1], table[2]};
-    carm.validate();
+    flag_value("the camera flags (--primary --secondary --sid --sod --rows --cols --pixel)",
+               [&] { carm.validate(); });
   }
 };
 
@@ -169,7 +241,9 @@ inline void keep_freed_memory() {
 /// - --help prints the help, --version prints "<name> <version>"; both exit 0 (stdout).
 /// - A usage error (unknown flag, missing or malformed value, failed check, non-finite float,
 ///   negative unsigned) prints one line "error: <what, naming the flag>" and exits 2.
-/// - gimm and std errors thrown by `body` print "error: ..." and exit 1.
+/// - A UsageError thrown by `body` (flags that conflict, a value the library refuses) is one
+///   too: exit 2.
+/// - Other gimm and std errors thrown by `body` print "error: ..." and exit 1.
 template <class Body>
 int run(CLI::App& app, int argc, char** argv, Body&& body) {
   const std::string name = program_name(app, argc, argv);
@@ -196,6 +270,9 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
   }
   try {
     return body();
+  } catch (const UsageError& e) {
+    std::cerr << "error: " << e.what() << " (see " << name << " --help)\n";
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
@@ -203,3 +280,7 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
 }
 
 }  // namespace gimm::cli
+
+/// GIMM_CHECK for a command line's own rules (flags that conflict or go together): a usage
+/// error, exit 2; `msg` names the flags.
+#define GIMM_USAGE_CHECK(cond, msg) GIMM_CHECK_AS(::gimm::cli::UsageError, cond, msg)

@@ -16,7 +16,18 @@
 
 #include "cli_common.hpp"
 #include "gimm/io/files.hpp"
+#include "gimm/io/volume_file.hpp"
 #include "gimm/pipeline/dataset_run.hpp"
+
+namespace {
+std::string detached_note_or_empty(const std::filesystem::path& file) {
+  try {
+    return file.empty() ? std::string() : gimm::detached_data_note(file);
+  } catch (const gimm::Error&) {
+    return {};
+  }
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels", "gimm-dataset"};
@@ -32,7 +43,7 @@ int main(int argc, char** argv) {
                  "folder (sub-folders included) of ImageCAS-style <id>.img<ext> + "
                  "<id>.label<ext>, <ext> e.g. .nii.gz");
   app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
-      ->check(CLI::PositiveNumber);
+      ->check(gimm::cli::at_least(1));
   app.add_option("--phantom-size", phantom_size,
                  "small|imagecas|chest (the whole chest, for realistic views)")
       ->check(CLI::IsMember({"small", "imagecas", "chest"}))
@@ -79,6 +90,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app.add_flag("--quiet", quiet, "no progress line, no per-patient timings");
+  std::string timings_file;
+  app.add_option("--timings", timings_file,
+                 "append each made patient's stage seconds to FILE as a JSON line (outside "
+                 "--out: the dataset itself holds no wall-clock times)");
   flags.add(app, options.carm, false);
   app.add_option("--export", export_format,
                  "also write OUT/reference in the released dataset's layout")
@@ -101,18 +116,23 @@ int main(int argc, char** argv) {
                   gimm::DatasetLayout(out).manifest().c_str());
       return 0;
     }
-    GIMM_CHECK(!out.empty(), "gimm-dataset: --out is required");
-    gimm::check_outputs_not_inputs({{"--out", out}}, {{"--input", input}, {"--views", views_file}},
-                                   true);
-    GIMM_CHECK(input.empty() != (phantom_count == 0),
-               "gimm-dataset: give exactly one of --input and --phantom");
+    GIMM_USAGE_CHECK(!out.empty(), "gimm-dataset: --out is required");
+    GIMM_USAGE_CHECK(
+        timings_file.empty() || !gimm::path_is_within(timings_file, out),
+        "--timings " << timings_file << " lies inside --out " << out
+                     << " (the dataset holds no wall-clock times); write it elsewhere");
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out}, {"--timings", timings_file}},
+                                          {{"--input", input}, {"--views", views_file}}, true);
+    GIMM_USAGE_CHECK(input.empty() != (phantom_count == 0),
+                     "gimm-dataset: give exactly one of --input and --phantom");
     // The view protocol picks every view's angles and the centerlines its isocentre: these
     // flags would change nothing but the manifest.
     for (const char* unused : {"--primary", "--secondary", "--isocenter"})
-      GIMM_CHECK(app.count(unused) == 0,
-                 "gimm-dataset: " << unused
-                                  << " sets nothing here (the view protocol picks the angles, "
-                                     "the centerlines the isocentre); use gimm-drr for one view");
+      GIMM_USAGE_CHECK(
+          app.count(unused) == 0,
+          "gimm-dataset: " << unused
+                           << " sets nothing here (the view protocol picks the angles, "
+                              "the centerlines the isocentre); use gimm-drr for one view");
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
     if (!views_file.empty()) options.listed_views = gimm::read_view_list(views_file);
@@ -121,8 +141,10 @@ int main(int argc, char** argv) {
     options.phantom_tubes = vessel_mode == "tubes";
     options.vessel_mode = gimm::parse_vessel_mode(options.phantom_tubes ? "mesh" : vessel_mode);
     gimm::DatasetRunOptions run;
-    run.shard = gimm::resolve_shard(shard_flag);
+    run.shard = gimm::cli::flag_value("--shard (or the array job's index variables)",
+                                      [&] { return gimm::resolve_shard(shard_flag); });
     run.quiet = quiet;
+    run.timings_file = timings_file;
     run.export_format = export_format;
     run.input = input.empty()
                     ? nlohmann::json{{"phantom", phantom_count}, {"phantom_size", phantom_size}}
@@ -131,6 +153,12 @@ int main(int argc, char** argv) {
         input.empty() ? gimm::phantom_sources(phantom_count, options.seed,
                                               gimm::parse_phantom_size(phantom_size))
                       : gimm::scan_imagecas_folder(input);
+    // Voxels read from outside a header's folder are named (docs/conventions.md, "Detached
+    // data files"); a header that cannot be read fails its patient later, by name.
+    for (const auto& source : sources)
+      for (const auto& file : {source.image, source.label})
+        if (const std::string note = detached_note_or_empty(file); !note.empty())
+          std::cerr << "gimm-dataset: note: patient " << source.id << ": " << note << "\n";
     const gimm::DatasetRunSummary s = gimm::run_dataset(sources, options, out, run);
     std::printf(
         "gimm-dataset: %zu patients (%zu failed): %zu views, %zu pairs, %zu dense labels -> %s\n",

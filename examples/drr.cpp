@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"siddon", "trilinear"}))
       ->capture_default_str();
   app.add_option("--step", step_mm, "trilinear step, mm (default: smallest voxel spacing)")
-      ->check(CLI::PositiveNumber);
+      ->check(gimm::cli::Positive);
   app.add_option("--out", out_prefix, "output prefix: PREFIX.png, PREFIX.npy, PREFIX.camera.json")
       ->required();
   app.add_flag("--quiet", quiet, "print nothing on success");
@@ -68,16 +68,27 @@ int main(int argc, char** argv) {
                "also write PREFIX.dcm: the image as X-ray angiography DICOM with its geometry");
   return gimm::cli::run(app, argc, argv, [&] {
     const auto t0 = std::chrono::steady_clock::now();
-    GIMM_CHECK(label_path.empty() == system_name.empty(),
-               "gimm-drr: --label and --system go together (got "
-                   << (label_path.empty() ? "--system without --label" : "--label without --system")
-                   << ")");
+    GIMM_USAGE_CHECK(
+        label_path.empty() == system_name.empty(),
+        "gimm-drr: --label and --system go together (got "
+            << (label_path.empty() ? "--system without --label" : "--label without --system")
+            << ")");
     const std::filesystem::path out_dir = std::filesystem::path(out_prefix).parent_path();
-    GIMM_CHECK(out_dir.empty() || std::filesystem::is_directory(out_dir),
-               "gimm-drr: output directory '" << out_dir.string() << "' does not exist");
+    GIMM_USAGE_CHECK(out_dir.empty() || std::filesystem::is_directory(out_dir),
+                     "gimm-drr: --out " << out_prefix << ": the folder '" << out_dir.string()
+                                        << "' does not exist");
+    std::vector<gimm::NamedPath> outputs;
+    for (const char* ext : {".npy", ".png", ".camera.json", ".dcm"})
+      outputs.push_back({"--out", out_prefix + ext});
+    gimm::cli::refuse_outputs_over_inputs(outputs,
+                                          {{"--volume", volume_path}, {"--label", label_path}});
     gimm::ContrastRecipe recipe;
     recipe.preset = gimm::parse_contrast_preset(recipe_name);
 
+    for (const std::string& file : {volume_path, label_path})
+      if (const std::string note = file.empty() ? "" : gimm::detached_data_note(file);
+          !note.empty())
+        std::cerr << "gimm-drr: note: " << note << "\n";
     gimm::Volume<float> ct = gimm::read_volume<float>(volume_path);
     std::optional<gimm::Volume<std::uint8_t>> injected;
     if (!label_path.empty()) {

@@ -20,6 +20,7 @@
 
 #include "cli_common.hpp"
 #include "gimm/anatomy/centerlines_json.hpp"
+#include "gimm/match/tree_file.hpp"
 #include "gimm/metrics/summary.hpp"
 #include "gimm/metrics/tree_error.hpp"
 #include "gimm/metrics/user_truth.hpp"
@@ -193,7 +194,7 @@ int evaluate(const std::string& dataset, const std::string& predictions, long to
       j["pair"] = p.id;
       per_pair.push_back(j);
     }
-    const nlohmann::json summary = {{"format", "gimm-eval/1"},
+    const nlohmann::json summary = {{"format", gimm::kEvalFormat},
                                     {"method", name},
                                     {"dataset", dataset},
                                     {"predictions", predictions},
@@ -221,27 +222,25 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
   std::string md;
   long top_k = -1;
   std::string rows;
+  std::vector<std::string> methods;
   for (const auto& run : runs) {
     const fs::path file = fs::path(run) / "summary.json";
     GIMM_CHECK_AS(gimm::IoError, fs::exists(file),
                   "'" << run << "' is not a gimm-eval output directory (no summary.json)");
-    const auto j = gimm::read_json_file(file);
-    GIMM_CHECK_AS(gimm::FormatError, j.value("format", "") == "gimm-eval/1",
-                  file.string() << ": not a gimm-eval/1 summary");
-    const long k = j.at("top_k").get<long>();
-    if (top_k >= 0 && k != top_k)
+    const gimm::EvalSummaryFile summary = gimm::read_eval_summary(file, run);
+    if (top_k >= 0 && summary.top_k != top_k)
       std::fprintf(stderr, "gimm-eval: warning: %s was scored with top-K %ld, the first with %ld\n",
-                   run.c_str(), k, top_k);
-    if (top_k < 0) top_k = k;
-    rows += gimm::markdown_row(j.value("method", run), gimm::summary_from_json(j.at("pooled")));
+                   run.c_str(), summary.top_k, top_k);
+    if (top_k < 0) top_k = summary.top_k;
+    rows += gimm::markdown_row(summary.method, summary.pooled);
+    methods.push_back(summary.method);
   }
   md = "## Comparison (top-K = " + k_label(top_k) + ")\n\n" + gimm::markdown_header() + rows;
   std::cout << md;
   if (out.empty()) return 0;
   std::vector<std::pair<fs::path, std::string>> curves;
-  for (const auto& run : runs)
-    curves.push_back({fs::path(run) / "topk.tsv",
-                      gimm::read_json_file(fs::path(run) / "summary.json").value("method", run)});
+  for (std::size_t n = 0; n < runs.size(); ++n)
+    curves.push_back({fs::path(runs[n]) / "topk.tsv", methods[n]});
   gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
     gimm::write_file_atomic(dir / "compare.md", md);
     plot_topk(curves, dir / "compare.png");
@@ -253,9 +252,9 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
 int evaluate_user_truth(const std::vector<std::string>& truths,
                         const std::vector<std::string>& predictions, double radius, long top_k,
                         const std::string& out) {
-  GIMM_CHECK(truths.size() == predictions.size(), "--truth and --matches pair up: got "
-                                                      << truths.size() << " truth files and "
-                                                      << predictions.size() << " matches files");
+  GIMM_USAGE_CHECK(truths.size() == predictions.size(),
+                   "--truth and --matches pair up: got " << truths.size() << " truth files and "
+                                                         << predictions.size() << " matches files");
   std::vector<gimm::PairScore> pairs;
   std::string rows;
   for (std::size_t n = 0; n < truths.size(); ++n) {
@@ -275,7 +274,7 @@ int evaluate_user_truth(const std::vector<std::string>& truths,
   if (out.empty()) return 0;
   gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
     gimm::write_json_file(dir / "summary.json",
-                          {{"format", "gimm-eval/1"},
+                          {{"format", gimm::kEvalFormat},
                            {"method", "own truth"},
                            {"top_k", top_k},
                            {"pooled", gimm::to_json(gimm::summarize(pairs, top_k))}});
@@ -287,9 +286,9 @@ int evaluate_user_truth(const std::vector<std::string>& truths,
 /// Distances of triangulated points (gimm-tree/1) to the true centerlines.
 int evaluate_trees(const std::vector<std::string>& trees,
                    const std::vector<std::string>& centerlines, const std::string& out) {
-  GIMM_CHECK(centerlines.size() == 1 || centerlines.size() == trees.size(),
-             "--centerlines: give one file, or one per --tree (" << trees.size() << "), got "
-                                                                 << centerlines.size());
+  GIMM_USAGE_CHECK(centerlines.size() == 1 || centerlines.size() == trees.size(),
+                   "--centerlines: give one file, or one per --tree (" << trees.size() << "), got "
+                                                                       << centerlines.size());
   std::vector<double> all;
   std::string rows;
   const auto stats_row = [](const std::string& name, const std::vector<double>& d) {
@@ -300,16 +299,9 @@ int evaluate_trees(const std::vector<std::string>& trees,
   for (std::size_t n = 0; n < trees.size(); ++n) {
     const gimm::CenterlineTree truth =
         gimm::read_centerlines(centerlines[centerlines.size() == 1 ? 0 : n]);
-    const nlohmann::json j = gimm::read_json_file(trees[n]);
-    GIMM_CHECK_AS(gimm::FormatError,
-                  j.is_object() && j.value("format", "") == "gimm-tree/1" && j.contains("points") &&
-                      j.at("points").is_array(),
-                  trees[n] << ": not a gimm-tree/1 file (gimm-match --tree)");
     std::vector<double> d;
-    for (const auto& p : j.at("points")) {
-      const Eigen::Vector3d X = gimm::matrix_from_json<3, 1>(p, "world_mm", trees[n]);
-      d.push_back(gimm::distance_to_centerlines(X, truth));
-    }
+    for (const gimm::TreePoint& p : gimm::read_tree_file(trees[n]).points)
+      d.push_back(gimm::distance_to_centerlines(p.world, truth));
     rows += stats_row(trees[n], d);
     all.insert(all.end(), d.begin(), d.end());
   }
@@ -336,7 +328,7 @@ int main(int argc, char** argv) {
   app.add_option("--dataset", dataset, "gimm-dataset directory");
   app.add_option("--predictions", predictions, "predictions directory (<patient>/<pair>.json)");
   app.add_option("--top-k", top_k, "most confident matches kept per pair (0 = all)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(gimm::cli::at_least(0))
       ->capture_default_str();
   app.add_option("--out", out, "output directory");
   app.add_option("--name", name, "method name in the tables (default: predictions folder)");
@@ -354,31 +346,43 @@ int main(int argc, char** argv) {
   app.add_option("--radius", radius,
                  "with --truth: a match is scored when its source point is within this many px "
                  "of a truth point")
+      ->check(gimm::cli::Positive)
+      ->check(CLI::Range(0.0, gimm::kMaxTruthRadius))
       ->capture_default_str();
   app.add_option("--tree", trees, "triangulated points (gimm-tree/1) to score in 3D")
       ->check(CLI::ExistingFile);
   app.add_option("--centerlines", centerlines, "with --tree: the true centerlines JSON")
       ->check(CLI::ExistingFile);
   return gimm::cli::run(app, argc, argv, [&] {
+    // --out is replaced whole: it must not be, or hold, anything read.
+    std::vector<gimm::NamedPath> inputs{{"--dataset", dataset}, {"--predictions", predictions}};
+    for (const auto& [flag, files] : {std::pair{"--compare", &runs},
+                                      {"--truth", &truths},
+                                      {"--matches", &matches},
+                                      {"--tree", &trees},
+                                      {"--centerlines", &centerlines}})
+      for (const auto& f : *files) inputs.push_back({flag, f});
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, inputs, true);
     const bool dataset_mode = !dataset.empty() || !predictions.empty();
     const int modes = int(!runs.empty()) + int(!truths.empty() || !matches.empty()) +
                       int(!trees.empty() || !centerlines.empty()) + int(dataset_mode);
-    GIMM_CHECK(modes <= 1,
-               "give one of --dataset/--predictions, --compare, --truth/--matches or "
-               "--tree/--centerlines");
+    GIMM_USAGE_CHECK(modes <= 1,
+                     "give one of --dataset/--predictions, --compare, --truth/--matches or "
+                     "--tree/--centerlines");
     if (!truths.empty() || !matches.empty())
       return evaluate_user_truth(truths, matches, radius, top_k, out);
     if (!trees.empty() || !centerlines.empty()) {
-      GIMM_CHECK(!trees.empty() && !centerlines.empty(), "--tree and --centerlines go together");
+      GIMM_USAGE_CHECK(!trees.empty() && !centerlines.empty(),
+                       "--tree and --centerlines go together");
       return evaluate_trees(trees, centerlines, out);
     }
     if (!runs.empty()) {
-      GIMM_CHECK(dataset.empty() && predictions.empty(),
-                 "--compare takes run directories only, not --dataset/--predictions");
+      GIMM_USAGE_CHECK(dataset.empty() && predictions.empty(),
+                       "--compare takes run directories only, not --dataset/--predictions");
       return compare(runs, out);
     }
-    GIMM_CHECK(!dataset.empty() && !predictions.empty(),
-               "give --dataset and --predictions (or --compare RUN...)");
+    GIMM_USAGE_CHECK(!dataset.empty() && !predictions.empty(),
+                     "give --dataset and --predictions (or --compare RUN...)");
     return evaluate(dataset, predictions, top_k, out, name, split, worst);
   });
 }

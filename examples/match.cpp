@@ -217,40 +217,49 @@ int main(int argc, char** argv) {
                      gimm::cli::default_weights_hint() + ")")
       ->check(CLI::ExistingFile);
   app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--seed", seed, "oracle/epipolar/camera errors: random seed")
       ->capture_default_str();
   app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
       ->capture_default_str();
   app.add_option("--tolerance", geometric.epipolar_tolerance_px,
                  "geometric: epipolar tolerance, px (calibration error of real C-arms)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::Positive);
   app.add_option("--junction-mm", geometric.junction_mm,
                  "geometric, segmenting: tree prior, how far in 3D the matches of two chains "
                  "meeting in A may be, mm (0 = off)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   double min_confidence = 0;
   app.add_option("--min-confidence", min_confidence,
                  "geometric: the DP margin a match needs at 4/3 px per mm at the isocentre (the "
                  "256 px phantoms), scaled with the images' pixels per mm (default 0.5 with "
-                 "masks, 1 segmenting; docs/geometric-matcher.md)");
+                 "masks, 1 segmenting; docs/geometric-matcher.md)")
+      ->check(gimm::cli::at_least(0));
   app.add_option("--order-cost", geometric.w_order,
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--camera-error-deg", camera_error.deg,
                  "dataset mode: rotate each view's camera given to the matcher by this many "
                  "degrees about both axes across the view (random signs, --seed), images exact")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--camera-error-mm", camera_error.mm,
                  "dataset mode: shift each view's camera by this many mm (random direction)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--noise-photons", degradation.photons,
                  "dataset mode: Poisson noise on the images the matcher sees, photons per "
                  "unattenuated pixel (render/image_degradation.hpp; 0 = none)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_option("--blur-px", degradation.blur_px,
                  "dataset mode: Gaussian blur of the images the matcher sees, sigma px (0 = none)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::at_least(0));
   app.add_flag("--segment", segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
   app.add_flag("--exact-vesselness", exact_vesselness,
@@ -262,7 +271,8 @@ int main(int argc, char** argv) {
                  "single pair with cameras: the triangulated points as VTK polydata");
   app.add_option("--max-reprojection", max_reprojection,
                  "learned, --tree: drop points reprojecting further than this, px (default: the "
-                 "hard gate's --delta)");
+                 "hard gate's --delta)")
+      ->check(gimm::cli::Positive);
   app.add_option("--dicom-a", dicom_a, "view A: XA/XRF DICOM file (image and C-arm geometry)")
       ->check(CLI::ExistingFile);
   app.add_option("--dicom-b", dicom_b,
@@ -287,19 +297,25 @@ int main(int argc, char** argv) {
   app.add_option("--table-b", table_b, "with --dicom-a/b: B's table, as --table-a")->expected(3);
   app.add_option("--pixel-a", pixel_a,
                  "with --dicom-a/b: A's detector pixel pitch, mm, replacing the file's")
-      ->check(gimm::cli::Finite);
+      ->check(gimm::cli::Finite)
+      ->check(gimm::cli::Positive);
   app.add_option("--pixel-b", pixel_b, "with --dicom-a/b: B's pitch, as --pixel-a")
-      ->check(gimm::cli::Finite);
-  app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)");
-  app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)");
+      ->check(gimm::cli::Finite)
+      ->check(gimm::cli::Positive);
+  app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)")
+      ->check(gimm::cli::at_least(0));
+  app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)")
+      ->check(gimm::cli::at_least(0));
   app.add_option("--system", system_name,
                  "LCA|RCA: the injected system, for view classes from DICOM angles (default: the "
                  "nearest of all 11 classes)")
       ->check(CLI::IsMember({"LCA", "RCA"}));
   app.add_option("--class-a", class_a, "view class of A: 1..11, 0 = unknown")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0, 11));
   app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0, 11));
   app.add_option("--camera-a", camera_a,
                  "camera of A (JSON): gate with the exact F; with --dicom-a/b it replaces the "
                  "geometry read from A's file")
@@ -310,20 +326,25 @@ int main(int argc, char** argv) {
                  "the shipped ones: hard, 4 px, --snap - else hard)")
       ->check(CLI::IsMember({"hard", "soft", "logit", "none"}));
   app.add_option("--tau", options.gate.tau, "soft/logit gate temperature, px")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(gimm::cli::Positive);
   app.add_option("--delta", options.gate.delta_px,
-                 "hard gate threshold, px (default: the weights' record, else 2; 5 with DICOM)");
+                 "hard gate threshold, px (default: the weights' record, else 2; 5 with DICOM)")
+      ->check(gimm::cli::Positive);
   auto* threshold_flag =
       app.add_option("--threshold", threshold,
                      "learned: coarse confidence a match needs, in [0, 1) (default: the value "
-                     "the weights record)");
+                     "the weights record)")
+          ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--snap", options.snap_to_epipolar,
                "move each B point onto its epipolar line after gating (needs a gate; default: "
                "as the weights record)");
-  auto* input_size_flag = app.add_option(
-      "--input-size", input_size,
-      "resize the longer side to N before matching (0: as is; default: the size the weights "
-      "were trained at, as they record it)");
+  auto* input_size_flag =
+      app.add_option(
+             "--input-size", input_size,
+             "resize the longer side to N before matching (0: as is; default: the size the weights "
+             "were trained at, as they record it)")
+          ->check(gimm::cli::at_least(0));
   app.add_option("--pair", pair,
                  "pair id written into the matches file, e.g. phantom-0000/LCA_00-01");
   app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
@@ -331,7 +352,7 @@ int main(int argc, char** argv) {
 
   return gimm::cli::run(app, argc, argv, [&] {
     gimm::cli::keep_freed_memory();
-    gimm::check_outputs_not_inputs(
+    gimm::cli::refuse_outputs_over_inputs(
         {{"--out", out}, {"--picture", picture}, {"--tree", tree}, {"--tree-vtk", tree_vtk}},
         {{"--image-a", image_a},
          {"--image-b", image_b},
@@ -379,48 +400,49 @@ int main(int argc, char** argv) {
                                                                 {"--class-b", "learned"},
                                                                 {"--system", "learned"}};
     for (const auto& [flag, owner] : method_flags)
-      GIMM_CHECK(app.count(flag) == 0 || method == owner,
-                 flag << " is for --method " << owner << ", not " << method);
-    GIMM_CHECK(app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
-               "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
-               "(without it the matcher uses the vessel masks)");
+      GIMM_USAGE_CHECK(app.count(flag) == 0 || method == owner,
+                       flag << " is for --method " << owner << ", not " << method);
+    GIMM_USAGE_CHECK(
+        app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
+        "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
+        "(without it the matcher uses the vessel masks)");
     // Every mode segments with it: a dataset (--segment), a pair of images, a pair of DICOMs.
     geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
     if (app.count("--min-confidence"))  // whichever of the two thresholds the mode uses
       geometric.min_confidence = geometric.min_confidence_segmented = min_confidence;
     if (!dataset.empty()) {
-      GIMM_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
-                     dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&
-                     tree.empty() && tree_vtk.empty() && class_a == 0 && class_b == 0,
-                 "--dataset matches a whole dataset (classes and cameras from its files); it "
-                 "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
-                 "--picture or --tree/--tree-vtk");
-      GIMM_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
+      GIMM_USAGE_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
+                           dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&
+                           tree.empty() && tree_vtk.empty() && class_a == 0 && class_b == 0,
+                       "--dataset matches a whole dataset (classes and cameras from its files); it "
+                       "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
+                       "--picture or --tree/--tree-vtk");
+      GIMM_USAGE_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
       std::unique_ptr<gimm::PairMatcher> matcher;
       if (method == "learned") {
         matcher = gimm_match::learned_matcher(learned_choice(), options);
       } else if (method == "geometric") {
-        GIMM_CHECK(weights.empty(), "--weights is for --method learned, not geometric");
-        GIMM_CHECK(geometry == "cameras",
-                   "--method geometric needs the cameras (--geometry "
-                   "cameras), got --geometry "
-                       << geometry);
+        GIMM_USAGE_CHECK(weights.empty(), "--weights is for --method learned, not geometric");
+        GIMM_USAGE_CHECK(geometry == "cameras",
+                         "--method geometric needs the cameras (--geometry "
+                         "cameras), got --geometry "
+                             << geometry);
         geometric.use_masks = !segment;
         matcher = gimm_match::geometric_matcher(geometric);
       } else {
-        GIMM_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
-        GIMM_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+        GIMM_USAGE_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
+        GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
         if (method == "oracle")
           matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
         else
           matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
       }
-      GIMM_CHECK(camera_error.none() || geometry == "cameras",
-                 "--camera-error-deg/-mm perturb the cameras: they need --geometry cameras");
-      degradation.validate();
-      GIMM_CHECK(degradation.none() || matcher->needs_images(),
-                 "--noise-photons/--blur-px degrade the images, and --method "
-                     << method << " does not look at them");
+      GIMM_USAGE_CHECK(camera_error.none() || geometry == "cameras",
+                       "--camera-error-deg/-mm perturb the cameras: they need --geometry cameras");
+      gimm::cli::flag_value("--noise-photons/--blur-px", [&] { degradation.validate(); });
+      GIMM_USAGE_CHECK(degradation.none() || matcher->needs_images(),
+                       "--noise-photons/--blur-px degrade the images, and --method "
+                           << method << " does not look at them");
       const bool estimates_F =
           method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
       return match_dataset(*matcher, dataset, split, geometry == "cameras", images == "formed",
@@ -430,18 +452,19 @@ int main(int argc, char** argv) {
     // One pair: from DICOM files, or from PNG images and camera JSON files.
     for (const char* flag :
          {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px", "--images"})
-      GIMM_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
+      GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
     for (const auto& [flag, frame] : {std::pair{"--frame-a", frame_a}, {"--frame-b", frame_b}})
-      GIMM_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
-    GIMM_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,
-               "--max-reprojection must be > 0 px, got " << max_reprojection);
+      GIMM_USAGE_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
+    GIMM_USAGE_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,
+                     "--max-reprojection must be > 0 px, got " << max_reprojection);
     gimm_match::LoadedPair loaded_pair;
     if (!dicom_a.empty() || !dicom_b.empty()) {
-      GIMM_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
-      GIMM_CHECK(image_a.empty() && image_b.empty(),
-                 "--dicom-a/b carry the images: no --image-a/b");
-      GIMM_CHECK(isocenter.empty() || (isocenter_a.empty() && isocenter_b.empty()),
-                 "--isocenter sets both views' isocentre: give it or --isocenter-a/-b, not both");
+      GIMM_USAGE_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
+      GIMM_USAGE_CHECK(image_a.empty() && image_b.empty(),
+                       "--dicom-a/b carry the images: no --image-a/b");
+      GIMM_USAGE_CHECK(
+          isocenter.empty() || (isocenter_a.empty() && isocenter_b.empty()),
+          "--isocenter sets both views' isocentre: give it or --isocenter-a/-b, not both");
       gimm::DicomPairOptions o;
       const auto vec3 = [](const std::vector<double>& v) -> std::optional<Eigen::Vector3d> {
         if (v.empty()) return std::nullopt;
@@ -485,11 +508,12 @@ int main(int argc, char** argv) {
       std::cout << "gimm-match: real geometry: gate " << options.gate.delta_px
                 << " px, geometric tolerance " << geometric.epipolar_tolerance_px << " px\n";
     } else {
-      GIMM_CHECK(!image_a.empty() && !image_b.empty(),
-                 "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
+      GIMM_USAGE_CHECK(
+          !image_a.empty() && !image_b.empty(),
+          "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
       for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
                                "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
-        GIMM_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
+        GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
       loaded_pair.a = gimm::read_png_unit(image_a);
       loaded_pair.b = gimm::read_png_unit(image_b);
       loaded_pair.camera_a = read_camera(camera_a);
@@ -498,12 +522,18 @@ int main(int argc, char** argv) {
       loaded_pair.field_a = gimm::exposed_field(loaded_pair.a);
       loaded_pair.field_b = gimm::exposed_field(loaded_pair.b);
     }
+    GIMM_USAGE_CHECK(method != "geometric" || (loaded_pair.camera_a && loaded_pair.camera_b),
+                     "--method geometric on one pair needs the cameras: --camera-a and "
+                     "--camera-b (or --dicom-a and --dicom-b)");
+    GIMM_USAGE_CHECK((tree.empty() && tree_vtk.empty()) || loaded_pair.camera_a,
+                     "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
     const gimm_match::PairOutputs outputs{pair, out, picture, tree, tree_vtk, start};
     if (method == "geometric")
       return gimm_match::match_geometric_pair(loaded_pair, geometric, outputs);
-    GIMM_CHECK(method == "learned", "--method " << method
-                                                << " matches a dataset's pairs (it needs their "
-                                                   "masks or labels): give --dataset DIR");
+    GIMM_USAGE_CHECK(method == "learned", "--method "
+                                              << method
+                                              << " matches a dataset's pairs (it needs their "
+                                                 "masks or labels): give --dataset DIR");
     return gimm_match::match_learned_pair(learned_choice(), options, loaded_pair, class_a, class_b,
                                           outputs);
   });

@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "right", "left", "codominant"}))
       ->capture_default_str();
   app.add_option("--noise", noise, "scanner noise sigma, HU")
-      ->check(CLI::NonNegativeNumber)
+      ->check(gimm::cli::at_least(0))
       ->capture_default_str();
   app.add_flag("--preview", preview, "also write S.slice.png and S.mip.png");
   return gimm::cli::run(app, argc, argv, [&] {

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # sha256 of every output a refactor must keep byte-identical: a 2-patient phantom dataset in
-# voxel and in mesh mode (timings.json excluded: it holds wall-clock times), gimm-drr, gimm-match
+# voxel and in mesh mode, gimm-drr, gimm-match
 # and gimm-eval outputs on it.
 #
 #   tools/output_hashes.sh BUILD_DIR WORK_DIR > hashes.txt

@@ -7,6 +7,7 @@
 #include "gimm/io/files.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/reconstruct.hpp"
+#include "gimm/match/tree_file.hpp"
 #include "methods.hpp"
 
 namespace gimm_match {
@@ -18,15 +19,18 @@ namespace {
 void write_tree(const std::string& json_path, const std::string& vtk_path,
                 const std::vector<gimm::GeometricMatch>& matches) {
   if (!json_path.empty()) {
-    nlohmann::json points = nlohmann::json::array();
-    for (const auto& m : matches)
-      points.push_back({{"a", {m.a.x(), m.a.y()}},
-                        {"b", {m.b.x(), m.b.y()}},
-                        {"world_mm", {m.world.x(), m.world.y(), m.world.z()}},
-                        {"confidence", m.confidence},
-                        {"consistent", m.consistent},
-                        {"branch", m.branch}});
-    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"}, {"points", points}});
+    gimm::TreeFile tree;
+    for (const auto& m : matches) {
+      gimm::TreePoint t;
+      t.a = m.a;
+      t.b = m.b;
+      t.world = m.world;
+      t.confidence = m.confidence;
+      t.branch = m.branch;
+      t.consistent = m.consistent;
+      tree.points.push_back(t);
+    }
+    gimm::write_tree_file(json_path, tree);
   }
   if (!vtk_path.empty()) {
     std::vector<Eigen::Vector3d> points;
@@ -51,9 +55,7 @@ std::unique_ptr<gimm::PairMatcher> geometric_matcher(const gimm::GeometricOption
 
 int match_geometric_pair(const LoadedPair& pair, const gimm::GeometricOptions& options,
                          const PairOutputs& outputs) {
-  GIMM_CHECK(pair.camera_a && pair.camera_b,
-             "--method geometric on one pair needs the cameras: --camera-a and --camera-b (or "
-             "--dicom-a and --dicom-b)");
+  GIMM_ASSERT(pair.camera_a && pair.camera_b);  // gimm-match refuses the pair without them
   const gimm::Image<float>& a = pair.a;
   const gimm::Image<float>& b = pair.b;
   gimm::PairInput input;

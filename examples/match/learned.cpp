@@ -7,6 +7,7 @@
 #include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/reconstruct.hpp"
+#include "gimm/match/tree_file.hpp"
 #include "gimm/nn/matcher_file.hpp"
 #include "methods.hpp"
 
@@ -19,8 +20,6 @@ namespace {
 gimm::nn::Matcher load_network(const LearnedChoice& choice, gimm::MatchOptions& options) {
   gimm::nn::Matcher network = gimm::nn::load_matcher(choice.weights);
   if (choice.threshold) network.set_threshold(*choice.threshold);
-  GIMM_CHECK(choice.input_size.value_or(0) >= 0,
-             "--input-size must be >= 0, got " << *choice.input_size);
   options.input_size = choice.input_size.value_or(network.config().input_size);
   gimm::apply_gate_choice(network.config(), choice.gate, options);
   return network;
@@ -30,17 +29,19 @@ gimm::nn::Matcher load_network(const LearnedChoice& choice, gimm::MatchOptions& 
 void write_reconstruction(const std::string& json_path, const std::string& vtk_path,
                           const gimm::Reconstruction& rec) {
   if (!json_path.empty()) {
-    nlohmann::json points = nlohmann::json::array();
-    for (const auto& p : rec.points)
-      points.push_back({{"a", {p.a.x(), p.a.y()}},
-                        {"b", {p.b.x(), p.b.y()}},
-                        {"world_mm", {p.world.x(), p.world.y(), p.world.z()}},
-                        {"reprojection_px", {p.reprojection_a, p.reprojection_b}},
-                        {"confidence", p.confidence}});
-    gimm::write_json_file(json_path, {{"format", "gimm-tree/1"},
-                                      {"points", points},
-                                      {"dropped_degenerate", rec.dropped_degenerate},
-                                      {"dropped_reprojection", rec.dropped_reprojection}});
+    gimm::TreeFile tree;
+    for (const auto& p : rec.points) {
+      gimm::TreePoint t;
+      t.a = p.a;
+      t.b = p.b;
+      t.world = p.world;
+      t.confidence = p.confidence;
+      t.reprojection_px = Eigen::Vector2d(p.reprojection_a, p.reprojection_b);
+      tree.points.push_back(t);
+    }
+    tree.dropped_degenerate = rec.dropped_degenerate;
+    tree.dropped_reprojection = rec.dropped_reprojection;
+    gimm::write_tree_file(json_path, tree);
   }
   if (!vtk_path.empty()) {
     std::vector<Eigen::Vector3d> points;
@@ -61,8 +62,6 @@ std::unique_ptr<gimm::PairMatcher> learned_matcher(const LearnedChoice& choice,
 int match_learned_pair(const LearnedChoice& choice, gimm::MatchOptions options,
                        const LoadedPair& pair, int class_a, int class_b,
                        const PairOutputs& outputs) {
-  GIMM_CHECK((outputs.tree.empty() && outputs.tree_vtk.empty()) || pair.camera_a,
-             "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
   const gimm::nn::Matcher matcher = load_network(choice, options);
   const gimm::Image<float>& a = pair.a;
   const gimm::Image<float>& b = pair.b;

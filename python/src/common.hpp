@@ -132,6 +132,9 @@ Eigen::Matrix<double, R, C> fixed(const py::handle& obj, const std::string& name
   Eigen::Matrix<double, R, C> m;
   for (int r = 0; r < R; ++r)
     for (int c = 0; c < C; ++c) m(r, c) = a.data()[r * C + c];
+  // A camera, an F or a position with a NaN in it gives NaN or inf everywhere downstream.
+  if (!m.allFinite())
+    throw py::value_error(name + ": must be finite, got " + py::repr(obj).cast<std::string>());
   return m;
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """gimm-dataset end to end: labels reproject, split by patient, a run killed at any moment
-and restarted equals an uninterrupted run byte for byte (timings.json aside: wall-clock), N
+and restarted equals an uninterrupted run byte for byte (seconds go to --timings, outside), N
 shards merged equal one run, bad patients are recorded while the rest goes on, ImageCAS
 sub-folders, dropped label voxels, single-tree labels, stage timings, and a full disk (a failed
 run, merge or export leaves nothing of its own, and a dataset already there unchanged).
@@ -40,18 +40,13 @@ def tree_files(root):
     return sorted(out)
 
 
-# Wall-clock seconds per stage: the one file that differs between runs by design.
-NOT_REPRODUCIBLE = "timings.json"
-
-
 def same_tree(a, b, what):
-    """The same files, byte for byte, but timings.json (which must be there in both)."""
+    """The same files, byte for byte (wall-clock seconds stay out of the dataset)."""
     fa, fb = tree_files(a), tree_files(b)
     if fa != fb:
         check(False, f"{what}: file lists differ: {sorted(set(fa) ^ set(fb))[:10]}")
         return
-    diff = [f for f in fa if os.path.basename(f) != NOT_REPRODUCIBLE and
-            not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
+    diff = [f for f in fa if not filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)]
     check(not diff, f"{what}: {len(diff)} files differ, e.g. {diff[:5]}")
 
 
@@ -86,7 +81,8 @@ def check_pair_labels(pdir, what, files_per_view=4, views=11, pair_count=27):
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
 full = os.path.join(TMP, "full")
-run(COMMON + ["--out", full])
+timings_file = os.path.join(TMP, "full-timings.jsonl")
+run(COMMON + ["--out", full, "--timings", timings_file])
 
 # Labels: every dense label reprojects with its cameras and satisfies the exact F.
 manifest = json.load(open(os.path.join(full, "manifest.json")))
@@ -94,14 +90,19 @@ check(len(manifest["patients"]) == 4 and all(p["status"] == "ok" for p in manife
       "four ok patients")
 pdir = os.path.join(full, "patients", "phantom-0001")
 pairs = check_pair_labels(pdir, "voxel vessels")
-# Stage timings: a timings.json per patient; done.json and the manifest hold none.
+# Stage timings: one JSON line per patient in the --timings file; no file of the dataset holds
+# seconds (it is byte-reproducible).
 STAGES = ["read", "split", "centerlines", "attenuation", "mesh", "views", "pairs", "writes"]
+timing_lines = {t["id"]: t for t in map(json.loads, open(timings_file))}
+check(sorted(timing_lines) == sorted(p["id"] for p in manifest["patients"]),
+      f"--timings: a line per patient, got {sorted(timing_lines)}")
 for p in manifest["patients"]:
-    t = json.load(open(os.path.join(full, "patients", p["id"], "timings.json")))
+    t = timing_lines.get(p["id"], {"views": 0, "seconds": {"total": 0}})
     done = open(os.path.join(full, "patients", p["id"], "done.json")).read()
-    check(t["id"] == p["id"] and t["views"] == 11 and t["seconds"]["total"] > 0 and
-          all(s in t["seconds"] for s in STAGES) and "seconds" not in done,
-          f"{p['id']}: timings.json {t}, done.json has seconds: {'seconds' in done}")
+    check(t["views"] == 11 and t["seconds"]["total"] > 0 and
+          all(s in t["seconds"] for s in STAGES) and "seconds" not in done and
+          not os.path.exists(os.path.join(full, "patients", p["id"], "timings.json")),
+          f"{p['id']}: timings {t}, done.json has seconds: {'seconds' in done}")
     check(p["label"]["components"] == 2 and p["label"]["dropped_voxels"] == 0 and
           all(sys["present"] for sys in p["systems"].values()), f"{p['id']}: record {p}")
 check("seconds" not in open(os.path.join(full, "manifest.json")).read(), "timings in the manifest")
@@ -336,6 +337,12 @@ out = os.path.join(TMP, "tubes_input")
 proc = run(["--input", TMP, "--vessels", "tubes", "--out", out], ok=False)
 check(proc.returncode == 2 and "--vessels" in proc.stderr and "phantom" in proc.stderr and
       not os.path.exists(out), f"--vessels tubes with --input: {proc.returncode} {proc.stderr}")
+
+# --timings inside --out would put wall-clock seconds into the dataset: a usage error.
+out = os.path.join(TMP, "timings_inside")
+proc = run(COMMON + ["--out", out, "--timings", os.path.join(out, "t.jsonl")], ok=False)
+check(proc.returncode == 2 and "--timings" in proc.stderr and not os.path.exists(out),
+      f"--timings inside --out: {proc.returncode} {proc.stderr}")
 
 # The progress line: patients done, rate and ETA; after a full resume the rate counts no one.
 LOUD = [a for a in COMMON if a != "--quiet"]

@@ -96,9 +96,9 @@ run("gimm-match", "--dicom-a", T("text.dcm"), "--dicom-b", T("b.dcm"), "--out", 
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--frame-b", 3, "--out", out,
     ok=False, contains="frame 3 is out of range")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--frame-a", -3, "--out", out,
-    ok=False, contains="--frame-a must be >= 0, got -3")
+    ok=False, contains="--frame-a: must be >= 0, got -3")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--tree", T("bad.tree.json"),
-    "--max-reprojection", -5, "--out", out, ok=False, contains="--max-reprojection must be > 0")
+    "--max-reprojection", -5, "--out", out, ok=False, contains="--max-reprojection: must be > 0, got -5")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--out", out, ok=False, contains="--dicom-b")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--image-a", T("a.png"),
     ok=False, contains="no --image-a/b")
@@ -108,7 +108,7 @@ run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--method", 
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--out", out, ok=False,
     contains="cannot be told from the angles")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--pixel-a", 0,
-    "--method", "geometric", "--out", out, ok=False, contains="pixel pitch must be > 0")
+    "--method", "geometric", "--out", out, ok=False, contains="--pixel-a: must be > 0, got 0")
 # One view's geometry given by hand: B's camera JSON replaces B's tags, A keeps its file's.
 p = run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--method", "geometric",
         "--isocenter", *iso, "--camera-b", T("b.camera.json"), "--table-a", 0, 0, 0)

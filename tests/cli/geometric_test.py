@@ -143,14 +143,14 @@ cases = [
      "--order-cost is for --method geometric, not learned"),
     ("tree prior for the learned matcher", ["--dataset", ds, "--junction-mm", 5],
      "--junction-mm is for --method geometric, not learned"),
-    ("negative ordering cost", [*pair, "--order-cost", -1], "ordering cost must be finite and >= 0, got -1"),
+    ("negative ordering cost", [*pair, "--order-cost", -1], "--order-cost: must be >= 0, got -1"),
     ("nan ordering cost", [*pair, "--order-cost", "nan"], "--order-cost: must be a finite number, got nan"),
-    ("negative tree prior", [*pair, "--junction-mm", -1], "junction_mm must be >= 0"),
+    ("negative tree prior", [*pair, "--junction-mm", -1], "--junction-mm: must be >= 0, got -1"),
     ("nan tree prior", [*pair, "--junction-mm", "nan"], "--junction-mm: must be a finite number, got nan"),
     ("min confidence for the learned matcher", ["--dataset", ds, "--min-confidence", 1],
      "--min-confidence is for --method geometric, not learned"),
     ("negative min confidence", [*pair, "--min-confidence", -0.5],
-     "minimum confidences must be finite and >= 0, got -0.5"),
+     "--min-confidence: must be >= 0, got -0.5"),
     ("sigma for the learned matcher", ["--dataset", ds, "--sigma", 2], "--sigma is for --method oracle"),
 ]
 for name, args, needle in cases:
@@ -158,6 +158,9 @@ for name, args, needle in cases:
     p = run("gimm-match", *args, "--out", out, ok=False)
     check(needle in p.stderr and p.stderr.startswith("error:"),
           f"{name}: message {p.stderr.strip()!r} lacks {needle!r}")
+    # A camera that does not fit its image is a bad input (exit 1); the rest are usage errors.
+    expected = 1 if name == "camera size" else 2
+    check(p.returncode == expected, f"{name}: exit {p.returncode}, expected {expected}")
     check(not os.path.exists(out), f"{name}: an output file was left behind")
 
 h.finish("geometric_test")

@@ -181,7 +181,7 @@ with open(truncated, "wb") as f:
 cases = [
     ("png", ["--image-a", A, "--image-b", bad_png, "--weights", WEIGHTS], "bad.png"),
     ("weights", ["--image-a", A, "--image-b", B, "--weights", truncated], "truncated.safetensors"),
-    ("class", [*base[:6], "--class-a", 12], "view class 12"),
+    ("class", [*base[:6], "--class-a", 12], "--class-a: Value 12 not in range 0 to 11"),
     ("one camera", [*base, "--camera-a", CA], "both cameras"),
     ("camera size", [*base, "--camera-a", CA, "--camera-b", os.path.join(TMP, "c.camera.json")], "camera B"),
     ("picture dir", [*base, "--picture", os.path.join(TMP, "no", "such", "dir", "p.png")], "p.png"),

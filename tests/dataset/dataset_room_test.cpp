@@ -46,6 +46,8 @@ TEST_CASE("Dataset layout: every path from one place", "[dataset]") {
   CHECK(gimm::pair_name("LCA", 3, 10) == "LCA_03-10");
   CHECK_THROWS_WITH(gimm::split_pair_id("nopatient"), Catch::Contains("'nopatient'"));
   CHECK_THROWS_WITH(gimm::split_pair_id("a/b/c"), Catch::Contains("'a/b/c'"));
+  CHECK_THROWS_WITH(gimm::split_pair_id("../x"), Catch::Contains("'../x'"));
+  CHECK_THROWS_WITH(gimm::split_pair_id("p/.."), Catch::Contains("'p/..'"));
 }
 
 TEST_CASE("Dataset reader: dense columns are found by name", "[dataset]") {
@@ -102,6 +104,36 @@ TEST_CASE("Dataset reader: the manifest's format is checked", "[dataset]") {
   gimm::write_json_file(root / "manifest.json",
                         {{"format", gimm::kDatasetFormat}, {"patients", json::array()}});
   CHECK(gimm::DatasetReader(root).pair_ids().empty());
+}
+
+TEST_CASE("Dataset reader: a listed patient must be there, under patients/", "[dataset]") {
+  const fs::path root = fresh("listed");
+  fs::create_directories(root / "patients" / "p1");
+  gimm::write_json_file(root / "patients" / "p1" / "done.json", {{"id", "p1"}});
+  const std::string manifest = (root / "manifest.json").string();
+  auto with = [&](json ids) {
+    json patients = json::array();
+    for (const auto& id : ids) patients.push_back({{"id", id}, {"status", "ok"}});
+    gimm::write_json_file(root / "manifest.json",
+                          {{"format", gimm::kDatasetFormat}, {"patients", patients}});
+    return gimm::DatasetReader(root);
+  };
+  CHECK(with({"p1"}).patients() == std::vector<std::string>{"p1"});
+  // Silently skipped before: a dataset with a hole scored as if whole.
+  CHECK_THROWS_AS(with({"p1", "p2"}).patients(), gimm::FormatError);
+  CHECK_THROWS_WITH(with({"p1", "p2"}).patients(), Catch::Contains(manifest) &&
+                                                       Catch::Contains("'p2'") &&
+                                                       Catch::Contains("missing"));
+  // Ids that leave patients/ are refused by name, whatever the folders hold.
+  for (const char* bad : {"../../../etc", "..", ".", "", "a/b", "a\\b"})
+    CHECK_THROWS_WITH(with({bad}).patients(), Catch::Contains("'" + std::string(bad) + "'") &&
+                                                  Catch::Contains("not a folder name"));
+  // A failed patient needs no folder.
+  gimm::write_json_file(
+      root / "manifest.json",
+      {{"format", gimm::kDatasetFormat},
+       {"patients", {{{"id", "p1"}, {"status", "ok"}}, {{"id", "gone"}, {"status", "failed"}}}}});
+  CHECK(gimm::DatasetReader(root).patients() == std::vector<std::string>{"p1"});
 }
 
 TEST_CASE("Dataset reader: wrong JSON types and huge numbers name the file and the key",
@@ -164,13 +196,27 @@ TEST_CASE("Dataset run: a finished patient made with other parameters is refused
   const gimm::DatasetLayout layout(root);
   fs::create_directories(layout.patient_dir("p"));
   CHECK(gimm::finished_patient(layout, "p", {{"seed", 1}}).is_null());
-  gimm::write_json_file(layout.done_record("p"), {{"id", "p"}, {"run", {{"seed", 1}}}});
+  gimm::write_json_file(layout.done_record("p"),
+                        {{"id", "p"}, {"status", "ok"}, {"run", {{"seed", 1}}}});
   gimm::write_file_atomic(layout.patient_dir("p") / "t.txt", std::string("x"));
   fs::rename(layout.patient_dir("p") / "t.txt", layout.patient_dir("p") / "a.json.tmp.h.2");
-  CHECK(gimm::finished_patient(layout, "p", {{"seed", 1}}) == json{{"id", "p"}});
+  CHECK(gimm::finished_patient(layout, "p", {{"seed", 1}}) == json{{"id", "p"}, {"status", "ok"}});
   CHECK_FALSE(fs::exists(layout.patient_dir("p") / "a.json.tmp.h.2"));  // swept
   CHECK_THROWS_WITH(gimm::finished_patient(layout, "p", {{"seed", 2}}),
                     Catch::Contains("/seed: 1 there, 2 here"));
+  // A record that is not this patient's finished one would go into the manifest as it is
+  // (before: an array threw nlohmann's own error, another id was taken).
+  const std::string where = layout.done_record("p").string();
+  for (const json& bad : {json::array({1, 2}), json{{"id", "p"}, {"status", "ok"}},
+                          json{{"id", "q"}, {"status", "ok"}, {"run", {{"seed", 1}}}},
+                          json{{"id", "p"}, {"status", "failed"}, {"run", {{"seed", 1}}}},
+                          json{{"id", "p"}, {"run", {{"seed", 1}}}}}) {
+    INFO(bad.dump());
+    gimm::write_json_file(layout.done_record("p"), bad);
+    CHECK_THROWS_AS(gimm::finished_patient(layout, "p", {{"seed", 1}}), gimm::FormatError);
+    CHECK_THROWS_WITH(gimm::finished_patient(layout, "p", {{"seed", 1}}),
+                      Catch::Contains(where) && Catch::Contains("remove the patient's folder"));
+  }
 }
 
 TEST_CASE("Dataset shard: flags and job-array indices", "[dataset]") {

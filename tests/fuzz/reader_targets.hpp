@@ -15,6 +15,7 @@
 #include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/dataset/reader.hpp"
+#include "gimm/dataset/run.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
@@ -24,6 +25,9 @@
 #include "gimm/io/volume_file.hpp"
 #include "gimm/labels/view_list.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/tree_file.hpp"
+#include "gimm/metrics/summary.hpp"
+#include "gimm/metrics/user_truth.hpp"
 #include "gimm/nn/matcher_file.hpp"
 #include "gimm/nn/safetensors.hpp"
 #ifdef GIMM_FUZZ_DICOM
@@ -68,6 +72,13 @@ inline std::string seed_pair_json() {
 "sparse": [0]})";
 }
 
+/// The "run" of a resumed patient's record (what its files depend on), as the seed writes it.
+inline nlohmann::json seed_run_record() {
+  return {{"parameters", {{"seed", 1}, {"view_mode", "shared"}}},
+          {"input", {{"phantom_seed", 7}}},
+          {"split", "train"}};
+}
+
 /// Where a harness writes a target's input before reading it: <scratch>/fuzz_readers/<name><suffix>
 /// (the matches reader checks the file's place against the pair id inside).
 inline fs::path input_path(const fs::path& scratch, const ReaderTarget& t) {
@@ -93,6 +104,17 @@ inline std::vector<ReaderTarget> reader_targets(const fs::path& fixtures) {
                [=](const fs::path& p) { copy_fixture(volumes / "ct.nrrd", p); }});
   t.push_back({"metaimage", ".mha", read_volume,
                [=](const fs::path& p) { copy_fixture(volumes / "ct.mha", p); }});
+  // Detached headers: the fuzzed header names its data file (beside it, copied there).
+  const auto detached = [=](const char* raw) {
+    return [=](const fs::path& p) {
+      if (!fs::exists(p.parent_path() / raw)) copy_fixture(volumes / raw, p.parent_path() / raw);
+      (void)gimm::read_volume<float>(p);
+    };
+  };
+  t.push_back({"nhdr", ".nhdr", detached("ct_nhdr.raw"),
+               [=](const fs::path& p) { copy_fixture(volumes / "ct_nhdr.nhdr", p); }});
+  t.push_back({"mhd", ".mhd", detached("ct_mhd.raw"),
+               [=](const fs::path& p) { copy_fixture(volumes / "ct_mhd.mhd", p); }});
   const auto read_png = [](const fs::path& p) { (void)gimm::read_png_unit(p); };
   t.push_back({"png8", ".png", read_png, [](const fs::path& p) {
                  gimm::Image<std::uint8_t> im(9, 7);
@@ -159,7 +181,7 @@ inline std::vector<ReaderTarget> reader_targets(const fs::path& fixtures) {
                [](const fs::path& p) {
                  // The reader wants <root>/manifest.json beside <root>/patients/.
                  const fs::path root = p.parent_path() / (p.stem().string() + "_dataset");
-                 fs::create_directories(root / "patients");
+                 fs::create_directories(root / "patients" / "p0");  // the seed's ok patient
                  // Not fs::copy_file: its sendfile is not retried on EINTR, and libFuzzer's timer
                  // signal interrupted it (a harness failure after 637,136 inputs).
                  const std::vector<unsigned char> bytes = gimm::read_file_bytes(p);
@@ -171,6 +193,60 @@ inline std::vector<ReaderTarget> reader_targets(const fs::path& fixtures) {
                  write_text(p, std::string(R"({"format": ")") + gimm::kDatasetFormat +
                                    R"(", "patients": [{"id": "p0", "status": "ok"},
 {"id": "p1", "status": "failed"}]})");
+               }});
+  // A user's sparse truth (gimm-eval --truth), a triangulated tree (gimm-eval --tree), an
+  // earlier run's summary (gimm-eval --compare).
+  t.push_back({"truth", ".json", [](const fs::path& p) { (void)gimm::read_user_truth(p, 3.0); },
+               [](const fs::path& p) {
+                 write_text(p, R"({"format": "gimm-truth/1", "pair": "p/LCA_00-01",
+"points_a": [[10, 12.5], [40, 20]], "points_b": [[11, 30], [52, 25]],
+"world_mm": [[1, 2, 3], [4, 5, 6]], "F": [[0, 0, 0], [0, 0, -1], [0, 1, 0]]})");
+               }});
+  t.push_back({"tree", ".json", [](const fs::path& p) { (void)gimm::read_tree_file(p); },
+               [](const fs::path& p) {
+                 gimm::TreeFile tree;
+                 for (int k = 0; k < 3; ++k) {
+                   gimm::TreePoint pt;
+                   pt.a = {10.0 + k, 20};
+                   pt.b = {30.0 + k, 21};
+                   pt.world = {1, 2, 3.0 + k};
+                   pt.confidence = 0.5;
+                   if (k == 0) pt.reprojection_px = Eigen::Vector2d(0.5, 0.25);
+                   if (k == 1) pt.branch = 2;
+                   if (k == 2) pt.consistent = true;
+                   tree.points.push_back(pt);
+                 }
+                 tree.dropped_degenerate = 1;
+                 tree.dropped_reprojection = 0;
+                 gimm::write_tree_file(p, tree);
+               }});
+  t.push_back({"eval_summary", ".json", [](const fs::path& p) { (void)gimm::read_eval_summary(p); },
+               [](const fs::path& p) {
+                 gimm::Summary s;
+                 s.pairs = 3;
+                 s.matches = 20;
+                 s.prec[0] = 0.5;
+                 s.prec[1] = 0.75;
+                 s.mean_px = 2.5;
+                 gimm::write_json_file(p, {{"format", gimm::kEvalFormat},
+                                           {"method", "seed"},
+                                           {"top_k", 20},
+                                           {"pooled", gimm::to_json(s)}});
+               }});
+  // A finished patient's record, as a resumed run reads it (done.json).
+  t.push_back({"done_record", ".json",
+               [](const fs::path& p) {
+                 const fs::path root = p.parent_path() / (p.stem().string() + "_dataset");
+                 const gimm::DatasetLayout layout(root);
+                 fs::create_directories(layout.patient_dir("p0"));
+                 const std::vector<unsigned char> bytes = gimm::read_file_bytes(p);
+                 write_text(layout.done_record("p0"), std::string(bytes.begin(), bytes.end()));
+                 (void)gimm::finished_patient(layout, "p0", seed_run_record());
+               },
+               [](const fs::path& p) {
+                 nlohmann::json record = {{"id", "p0"}, {"split", "train"}, {"status", "ok"}};
+                 record["run"] = seed_run_record();
+                 gimm::write_json_file(p, record);
                }});
 #ifdef GIMM_FUZZ_DICOM
   t.push_back({"dicom", ".dcm", [](const fs::path& p) { (void)gimm::read_xa_dicom(p.string()); },

@@ -46,3 +46,56 @@ TEST_CASE("read_volume on a folder or an unknown name names the formats and how 
   }
   CHECK_THROWS_WITH(gimm::read_volume<float>(folder), Catch::Contains("is a folder"));
 }
+
+TEST_CASE("Detached data files: anywhere, named when outside, regular files only",
+          "[io][volume_file]") {
+  // Policy (docs/conventions.md, "Detached data files"): NRRD and MetaImage allow a data file
+  // anywhere; gimm reads it, detached_data_note names one outside the header's folder (the CLIs
+  // print it), and a folder, device or pipe is refused by name.
+  const fs::path home = fixtures::tmp("detached") / "headers";
+  fs::create_directories(home / "sub");
+  fs::copy_file(fixtures::dir() / "ct_nhdr.raw", home / "sub" / "inside.raw",
+                fs::copy_options::overwrite_existing);
+  struct Format {
+    const char* header;
+    const char* key;
+    const char* raw;
+  };
+  for (const Format f : {Format{"ct_nhdr.nhdr", "data file: ", "ct_nhdr.raw"},
+                         Format{"ct_mhd.mhd", "ElementDataFile = ", "ct_mhd.raw"}}) {
+    const std::string text = fixtures::read_text(fixtures::dir() / f.header);
+    const std::string raw = (fixtures::dir() / f.raw).string();
+    const std::string ext = fs::path(f.header).extension().string();
+    auto header_to = [&](const std::string& name, const std::string& data) {
+      const fs::path p = home / (name + ext);
+      fixtures::write_text(
+          p, fixtures::replaced(text, std::string(f.key) + f.raw, std::string(f.key) + data));
+      return p;
+    };
+    INFO(f.header);
+    // Beside (or below) the header: read, no note.
+    const fs::path below = header_to("below", "sub/inside.raw");
+    CHECK(fixtures::fixture_difference(gimm::read_volume<float>(below)) == "");
+    CHECK(gimm::detached_data_note(below).empty());
+    CHECK(gimm::volume_data_file(below) == home / "sub" / "inside.raw");
+    // Outside: absolute, or climbing out: read, and the note names both files.
+    REQUIRE(fs::relative(raw, home).string().rfind("..", 0) == 0);  // climbs out of home
+    for (const std::string& data : {raw, fs::relative(raw, home).string()}) {
+      const fs::path outside = header_to("outside", data);
+      CHECK(fixtures::fixture_difference(gimm::read_volume<float>(outside)) == "");
+      const std::string note = gimm::detached_data_note(outside);
+      CHECK_THAT(note, Catch::Contains(outside.string()) && Catch::Contains("ct_") &&
+                           Catch::Contains("outside its folder"));
+    }
+    // A device, a folder: refused by name, before a byte is read (/dev/zero streamed forever).
+    for (const std::string& data : {std::string("/dev/zero"), home.string()}) {
+      const fs::path bad = header_to("device", data);
+      CHECK_THROWS_AS(gimm::read_volume<float>(bad), gimm::FormatError);
+      CHECK_THROWS_WITH(gimm::read_volume<float>(bad),
+                        Catch::Contains(data) && Catch::Contains("not a regular file"));
+    }
+  }
+  // Attached data and NIfTI: the file itself.
+  CHECK(gimm::volume_data_file(fixtures::dir() / "ct.nrrd") == fixtures::dir() / "ct.nrrd");
+  CHECK(gimm::detached_data_note(fixtures::dir() / "source.nii").empty());
+}

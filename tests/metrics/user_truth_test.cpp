@@ -60,6 +60,19 @@ TEST_CASE("Own truth: matches near a truth point are scored, the rest are not", 
                                           3),
                     Catch::Contains("world.json") && Catch::Contains("world_mm"));
   CHECK_THROWS_WITH(gimm::read_user_truth(path, 0), Catch::Contains("radius"));
+  CHECK_THROWS_WITH(gimm::read_user_truth(path, 1e6), Catch::Contains("radius"));
+  // A point off any detector asked for a mask of rows x cols bytes: 1.5 GB at 40000 px, an int
+  // overflow at 3e9. Refused by name and value, before any mask is made.
+  for (const char* far : {"40000", "3e9", "16384"})
+    CHECK_THROWS_WITH(
+        gimm::read_user_truth(truth_file("far.json", std::string(R"({"points_a": [[1, 2]],
+            "points_b": [[)") + far + ", 5]]}"),
+                              3),
+        Catch::Contains("far.json") && Catch::Contains("point 0") && Catch::Contains("detector"));
+  CHECK(gimm::read_user_truth(truth_file("edge.json", R"({"points_a": [[16383, 2]],
+            "points_b": [[1, 2]]})"),
+                              1)
+            .mask_a->cols() == 16385);
 }
 
 TEST_CASE("Tree error: distance to the polylines, not only their vertices", "[metrics]") {
@@ -72,4 +85,37 @@ TEST_CASE("Tree error: distance to the polylines, not only their vertices", "[me
   CHECK(gimm::distance_to_centerlines({-3, 4, 0}, tree) == Approx(5));      // past the end
   CHECK(gimm::distance_to_centerlines({10, 5, 1.5}, tree) == Approx(1.5));  // second segment
   CHECK(std::isinf(gimm::distance_to_centerlines({0, 0, 0}, gimm::CenterlineTree{})));
+}
+
+TEST_CASE("Eval summary: an earlier run's summary.json is read or refused by key", "[metrics]") {
+  const fs::path ok = truth_file("summary.json", R"({"format": "gimm-eval/1", "method": "m",
+      "top_k": 20, "pooled": {"pairs": 3, "matches": 40, "prec_3px": 0.75, "mean_px": 2.5,
+      "median_mm": null}})");
+  const gimm::EvalSummaryFile s = gimm::read_eval_summary(ok);
+  CHECK(s.method == "m");
+  CHECK(s.top_k == 20);
+  CHECK(s.pooled.pairs == 3);
+  CHECK(s.pooled.matches == 40);
+  CHECK(s.pooled.prec[1] == 0.75);
+  CHECK(s.pooled.mean_px == 2.5);
+  CHECK(std::isnan(s.pooled.median_mm));
+  CHECK(gimm::read_eval_summary(truth_file("unnamed.json", R"({"format": "gimm-eval/1",
+      "top_k": 0, "pooled": {}})"),
+                                "run1")
+            .method == "run1");
+  // Before: nlohmann's own errors ("type must be number"), naming neither file nor key.
+  for (const auto& [text, word] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"format": "gimm-eval/2", "top_k": 1, "pooled": {}})", "gimm-eval/1"},
+           {R"({"format": "gimm-eval/1", "top_k": "x", "pooled": {}})", "top_k"},
+           {R"({"format": "gimm-eval/1", "top_k": -3, "pooled": {}})", "top_k"},
+           {R"({"format": "gimm-eval/1", "top_k": 1, "pooled": 7})", "pooled"},
+           {R"({"format": "gimm-eval/1", "top_k": 1, "pooled": {"pairs": "3"}})", "pairs"},
+           {R"({"format": "gimm-eval/1", "top_k": 1, "pooled": {"pairs": -3}})", "pairs"},
+           {R"({"format": "gimm-eval/1", "top_k": 1, "method": 5, "pooled": {}})", "method"}}) {
+    INFO(text);
+    const fs::path bad = truth_file("bad_summary.json", text);
+    CHECK_THROWS_AS(gimm::read_eval_summary(bad), gimm::FormatError);
+    CHECK_THROWS_WITH(gimm::read_eval_summary(bad),
+                      Catch::Contains("bad_summary.json") && Catch::Contains(word));
+  }
 }

@@ -369,6 +369,35 @@ class Torch(unittest.TestCase):
         self.assertAlmostEqual(float(tensor.mean()), float(base["intensity"].mean()), places=5)
 
 
+class NonFiniteOptions(unittest.TestCase):
+    """Options a user sets from Python are checked as the CLIs check their flags (before: a
+    negative mu_water rendered, min_spur_mm=nan ran, a NaN point or F gave garbage)."""
+
+    def test_recipe_values(self):
+        p = phantom()
+        for field, value in (("mu_water", -1.0), ("mu_water", float("nan")),
+                             ("bone_weight", -0.5), ("lumen_hu", float("inf"))):
+            with self.assertRaisesRegex(gimm.Error, rf"{field} must be .*, got (-1|-0.5|nan|inf)"):
+                gimm.Renderer(p["hu"], lca(), geometry=p["geometry"], recipe={field: value})
+
+    def test_centerline_options(self):
+        p = phantom()
+        for value in (float("nan"), -1.0):
+            with self.assertRaisesRegex(gimm.Error, r"min_spur_mm must be >= 0, got (nan|-1)"):
+                gimm.extract_centerlines(lca(), p["geometry"], min_spur_mm=value)
+
+    def test_non_finite_points_and_matrices(self):
+        pts = np.random.default_rng(0).random((20, 3))
+        pts[7, 1] = np.nan
+        with self.assertRaisesRegex(gimm.Error, "point 7 is not finite"):
+            gimm.farthest_point_sampling(pts, 5)
+        F = np.eye(3)
+        F[0, 0] = np.nan
+        xy = np.zeros((3, 2))
+        with self.assertRaisesRegex(ValueError, "F: must be finite"):
+            gimm.symmetric_epipolar_distance_sq(F, xy, xy)
+
+
 class GilAndThreads(unittest.TestCase):
     def test_thread_count_is_bounded(self):
         # 10**9 threads used to be accepted, and libgomp killed the interpreter at the next

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gimm/anatomy/components.hpp"
@@ -86,6 +87,32 @@ struct ContrastRecipe {
   double native_blood_hu = 45;
   double soft_weight = 0.35;
   double bone_weight = 1.0;
+
+  /// Refuses a recipe no scanner could give: mu_water must be > 0, every HU finite, the
+  /// factors and weights >= 0 (a NaN or a negative mu would render NaN or negative depths).
+  void validate(const std::string& what = "recipe") const {
+    GIMM_CHECK(std::isfinite(mu_water) && mu_water > 0,
+               what << ": mu_water must be > 0 mm^-1, got " << mu_water);
+    const std::pair<const char*, double> hus[] = {
+        {"reference_soft_threshold_hu", reference_soft_threshold_hu},
+        {"reference_bone_threshold_hu", reference_bone_threshold_hu},
+        {"lumen_hu", lumen_hu},
+        {"blood_pool_lo_hu", blood_pool_lo_hu},
+        {"bone_hu", bone_hu},
+        {"bone_shell_margin_hu", bone_shell_margin_hu},
+        {"native_blood_hu", native_blood_hu}};
+    for (const auto& [name, value] : hus)
+      GIMM_CHECK(std::isfinite(value), what << ": " << name << " must be finite, got " << value);
+    const std::pair<const char*, double> weights[] = {
+        {"reference_soft_factor", reference_soft_factor},
+        {"reference_coronary_boost", reference_coronary_boost},
+        {"reference_bone_weight", reference_bone_weight},
+        {"soft_weight", soft_weight},
+        {"bone_weight", bone_weight}};
+    for (const auto& [name, value] : weights)
+      GIMM_CHECK(std::isfinite(value) && value >= 0,
+                 what << ": " << name << " must be >= 0, got " << value);
+  }
 
   /// What the angiography preset makes of a voxel at or above blood_pool_lo_hu.
   enum class Dense : std::uint8_t { none = 0, blood = 1, bone = 2 };

@@ -198,6 +198,10 @@ inline SkeletonGraph skeleton_graph(const Volume<std::uint8_t>& skel) {
 template <class T>
 CenterlineTree extract_centerlines(const Volume<T>& full_mask, const SkeletonOptions& options = {},
                                    const std::string& what = "mask") {
+  GIMM_CHECK(std::isfinite(options.min_spur_mm) && options.min_spur_mm >= 0,
+             what << ": min_spur_mm must be >= 0, got " << options.min_spur_mm);
+  GIMM_CHECK(std::isfinite(options.spur_radius_factor) && options.spur_radius_factor >= 0,
+             what << ": spur_radius_factor must be >= 0, got " << options.spur_radius_factor);
   const Volume<std::uint8_t> mask = crop_to_foreground(full_mask, 2);
   const Volume<float> distance = distance_to_background(mask);
   Volume<std::uint8_t> skel = thin(mask, distance);

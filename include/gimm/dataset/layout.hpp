@@ -13,7 +13,6 @@
 ///   patients/<id>/views/<view>.camera.json           camera, view class, angles, PNG window
 ///   patients/<id>/views/<view>.points.json           projected centerline points
 ///   patients/<id>/pairs/<pair>.json                  pair labels (dense, sparse, F, classes)
-///   patients/<id>/timings.json                       seconds per stage (vary run to run)
 ///   patients/<id>/done.json                          the patient's record, written last
 ///   reference/                                       --export reference (the released layout)
 ///
@@ -45,7 +44,22 @@ inline std::pair<std::string, std::string> split_pair_id(const std::string& id) 
   GIMM_CHECK(slash != std::string::npos && slash > 0 && slash + 1 < id.size() &&
                  id.find('/', slash + 1) == std::string::npos,
              "pair id must be <patient>/<pair>, got '" << id << "'");
-  return {id.substr(0, slash), id.substr(slash + 1)};
+  std::pair<std::string, std::string> parts{id.substr(0, slash), id.substr(slash + 1)};
+  for (const std::string& part : {parts.first, parts.second})
+    GIMM_CHECK(part != "." && part != ".." &&
+                   part.find_first_of(std::string("\\\0", 2)) == std::string::npos,
+               "pair id must be <patient>/<pair> of folder names, got '" << id << "'");
+  return parts;
+}
+
+/// Refuses a patient id that is no single folder name ("", ".", "..", a '/', a '\\' or a NUL):
+/// an id read from a file ("../../etc" in a manifest) must not reach outside patients/.
+inline void check_patient_name(const std::string& id, const std::string& where) {
+  GIMM_CHECK_AS(
+      FormatError,
+      !id.empty() && id != "." && id != ".." &&
+          id.find_first_of(std::string("/\\\0", 3)) == std::string::npos,
+      where << ": patient id '" << id << "' is not a folder name (no '/', '\\', '..' or empty id)");
 }
 
 class DatasetLayout {
@@ -88,9 +102,6 @@ class DatasetLayout {
   }
   std::filesystem::path done_record(const std::string& patient) const {
     return patient_dir(patient) / "done.json";
-  }
-  std::filesystem::path timings(const std::string& patient) const {
-    return patient_dir(patient) / "timings.json";
   }
 
   /// A view's files: its stem plus ".png", ".mask.png", ".overlap.png", ".npy", ".formed.png",

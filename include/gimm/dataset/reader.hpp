@@ -196,7 +196,15 @@ class DatasetReader {
                       where << ": 'patients'[" << k
                             << "] must be an object with a string 'id' and 'status', got "
                             << p.dump());
-        if (p.value("status", "") == "ok") patients.push_back(p["id"].get<std::string>());
+        if (p.value("status", "") != "ok") continue;
+        const std::string id = p["id"].get<std::string>();
+        check_patient_name(id, where + ": 'patients'[" + std::to_string(k) + "]");
+        // A patient the manifest calls finished must be there: skipping it would score a
+        // dataset with a hole in it as if it were whole.
+        GIMM_CHECK_AS(FormatError, fs::is_directory(layout_.patient_dir(id)),
+                      where << ": patient '" << id << "' is listed as ok but its folder "
+                            << layout_.patient_dir(id).string() << " is missing");
+        patients.push_back(id);
       }
     } else {
       for (const auto& e : fs::directory_iterator(layout_.patients_dir())) {

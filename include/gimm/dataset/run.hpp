@@ -3,7 +3,7 @@
 /// whether a finished patient was made with the same parameters, and merging shard manifests.
 /// Patient k (in id order) belongs to shard k mod N; a killed run started again skips finished
 /// patients (their done.json), so any interleaving of kills, restarts and shards ends with the
-/// same tree as one uninterrupted run (timings.json aside).
+/// same tree as one uninterrupted run.
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -132,14 +132,27 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
   remove_stale_temporaries(layout.patients_dir(), patient + kTemporaryMark);  // its staging folders
   remove_stale_temporaries(dir);  // files of a patient folder written in place (before staging)
   if (!fs::exists(layout.done_record(patient))) return nullptr;
+  const std::string where = layout.done_record(patient).string();
   nlohmann::json record = read_json_file(layout.done_record(patient));
-  const nlohmann::json stored = record.value("run", nlohmann::json());
+  GIMM_CHECK_AS(FormatError, record.is_object() && record.contains("run"),
+                where << ": not a finished patient's record (an object with 'run'); remove the "
+                         "patient's folder to make it again");
+  const nlohmann::json stored = record.at("run");
   record.erase("run");
   const std::string difference = first_json_difference(stored, run);
   GIMM_CHECK(difference.empty(), "gimm-dataset: '"
                                      << dir.string() << "' was made with other parameters ("
                                      << difference << "); use another --out, or the parameters "
                                      << "it was made with");
+  // It goes into the manifest as it is: the record must be this patient's, and finished.
+  GIMM_CHECK_AS(
+      FormatError,
+      record.contains("id") && record.at("id") == patient && record.contains("status") &&
+          record.at("status") == "ok",
+      where << ": the record is not patient '" << patient << "' finished (id "
+            << (record.contains("id") ? record.at("id").dump() : std::string("none")) << ", status "
+            << (record.contains("status") ? record.at("status").dump() : std::string("none"))
+            << "); remove the patient's folder to make it again");
   return record;
 }
 

@@ -156,10 +156,6 @@ class DatasetWriter {
     write_json_file(layout_.centerlines(patient), centerlines, -1);
   }
 
-  void write_timings(const std::string& patient, const nlohmann::json& timings) const {
-    write_json_file(layout_.timings(patient), timings);
-  }
-
   /// Written last: its presence means the patient is complete (resume skips it).
   void write_done_record(const std::string& patient, const nlohmann::json& record) const {
     write_json_file(layout_.done_record(patient), record);

@@ -252,8 +252,7 @@ inline MetaImageHeader read_metaimage_header(const std::filesystem::path& path) 
     data.file = path;
     data.offset = fields.end;
   } else {
-    const std::filesystem::path name(file);
-    data.file = name.is_absolute() ? name : path.parent_path() / name;
+    data.file = detached_data_file(path, file, what, "ElementDataFile");
   }
   // HeaderSize counts bytes of the data file, before any decompression (MetaIO seeks there).
   if (compressed)

@@ -476,8 +476,7 @@ inline NrrdHeader read_nrrd_header(const std::filesystem::path& path) {
                       !(words.size() > 1 && words[0].find('%') != std::string_view::npos),
                   "'" << what << "': field 'data file': '" << name
                       << "' is not supported (gimm reads one data file, not LIST or a pattern)");
-    const std::filesystem::path file(name);
-    data.file = file.is_absolute() ? file : path.parent_path() / file;
+    data.file = detached_data_file(path, name, what, "field 'data file'");
     data.offset = 0;
   }
   if (line_skip > 0) {  // the lines sit before the (possibly compressed) data

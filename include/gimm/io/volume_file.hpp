@@ -10,6 +10,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/volume.hpp"
+#include "gimm/io/files.hpp"
 #include "gimm/io/metaimage.hpp"
 #include "gimm/io/nifti.hpp"
 #include "gimm/io/nrrd.hpp"
@@ -65,6 +66,25 @@ Volume<T> read_volume(const std::filesystem::path& path) {
       break;
   }
   return read_nifti<T>(path);
+}
+
+/// The file a volume's voxels are read from: `path` itself, or a detached header's data file.
+inline std::filesystem::path volume_data_file(const std::filesystem::path& path) {
+  const auto format = volume_format(path);
+  if (format == VolumeFormat::nrrd) return read_nrrd_header(path).data.file;
+  if (format == VolumeFormat::metaimage) return read_metaimage_header(path).data.file;
+  return path;
+}
+
+/// For the log: "'h.nhdr' takes its voxels from '/else/where.raw', outside its folder" when a
+/// detached header's data file lies outside the header's folder (an absolute path, a "..", a
+/// link), else "". The formats allow it and gimm reads it; the log says which file was read.
+inline std::string detached_data_note(const std::filesystem::path& path) {
+  const std::filesystem::path data = volume_data_file(path);
+  const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : ".";
+  if (data == path || path_is_within(data, folder)) return {};
+  return "'" + path.string() + "' takes its voxels from '" + resolved_path(data).string() +
+         "', outside its folder";
 }
 
 }  // namespace gimm

@@ -87,6 +87,27 @@ struct VoxelLayout {
   std::string skip_field = "byte skip";          ///< the header field behind `skip`
 };
 
+/// A detached header's data file (NRRD "data file:", MetaImage ElementDataFile): `name` as the
+/// header `what` writes it in `field`, relative to the header's folder or absolute. Policy
+/// (docs/conventions.md, "Detached data files"): the formats allow any path, and so does gimm
+/// (volume_file.hpp's detached_data_note names one outside the header's folder in the CLIs'
+/// logs), but only a regular file: a folder, device or pipe (/dev/zero, /dev/stdin) is refused
+/// by name, as it would stream without end or block.
+inline std::filesystem::path detached_data_file(const std::filesystem::path& header,
+                                                const std::string& name, const std::string& what,
+                                                const char* field) {
+  const std::filesystem::path file(name);
+  const std::filesystem::path resolved = file.is_absolute() ? file : header.parent_path() / file;
+  std::error_code ec;
+  const auto status = std::filesystem::status(resolved, ec);
+  GIMM_CHECK_AS(FormatError,
+                !std::filesystem::exists(status) || std::filesystem::is_regular_file(status),
+                "'" << what << "': " << field << " '" << name << "' ('" << resolved.string()
+                    << "') is not a regular file (a folder, device or pipe): gimm reads voxels "
+                       "from files only");
+  return resolved;
+}
+
 namespace detail {
 
 inline bool host_is_big_endian() {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "gimm/anatomy/centerlines.hpp"
+#include "gimm/core/error.hpp"
 #include "gimm/core/image.hpp"
 #include "gimm/core/rng.hpp"
 #include "gimm/geometry/epipolar.hpp"
@@ -100,6 +101,10 @@ void mark_occlusion(std::vector<ProjectedPoint>& view, const std::vector<LabelPo
 inline std::vector<std::size_t> farthest_point_sampling(const std::vector<Eigen::Vector3d>& points,
                                                         std::size_t count, Rng& rng) {
   std::vector<std::size_t> chosen;
+  // A NaN distance compares false with every other: the sampling would return one point.
+  for (std::size_t n = 0; n < points.size(); ++n)
+    GIMM_CHECK(points[n].allFinite(), "farthest_point_sampling: point "
+                                          << n << " is not finite: " << points[n].transpose());
   if (points.empty() || count == 0) return chosen;
   std::vector<double> nearest(points.size(), std::numeric_limits<double>::infinity());
   std::size_t next = static_cast<std::size_t>(rng.below(points.size()));

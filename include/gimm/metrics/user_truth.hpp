@@ -29,6 +29,11 @@
 namespace gimm {
 
 constexpr const char* kTruthFormat = "gimm-truth/1";
+/// Truth points lie on a detector: at most the C-arm's largest (16384 px, CArm::validate), so a
+/// stray coordinate cannot ask for a mask of gigabytes (or overflow its int size).
+constexpr double kMaxTruthPixel = 16384;
+/// The largest truth radius: a disc wider than this is no longer "at the truth point".
+constexpr double kMaxTruthRadius = 256;
 
 /// Sparse truth's stand-in for a vessel mask: the discs of `radius` px around `points`, on an
 /// image just large enough to hold them (for truth built in memory, as read_user_truth does).
@@ -54,8 +59,8 @@ inline std::shared_ptr<const Image<std::uint8_t>> sparse_truth_mask(
 }
 
 inline PairTruth read_user_truth(const std::filesystem::path& path, double radius_px) {
-  GIMM_CHECK(std::isfinite(radius_px) && radius_px > 0,
-             "the truth radius must be > 0 px, got " << radius_px);
+  GIMM_CHECK(std::isfinite(radius_px) && radius_px > 0 && radius_px <= kMaxTruthRadius,
+             "the truth radius must be in (0, " << kMaxTruthRadius << "] px, got " << radius_px);
   const nlohmann::json j = read_json_file(path);
   const std::string where = path.string();
   GIMM_CHECK_AS(FormatError, j.is_object(), where << ": a truth file must be a JSON object");
@@ -93,10 +98,14 @@ inline PairTruth read_user_truth(const std::filesystem::path& path, double radiu
     }
   }
   for (std::size_t k = 0; k < a.size(); ++k) {
-    GIMM_CHECK_AS(
-        FormatError,
-        a[k].allFinite() && b[k].allFinite() && a[k].minCoeff() >= -0.5 && b[k].minCoeff() >= -0.5,
-        where << ": point " << k << " is not a finite pixel position");
+    GIMM_CHECK_AS(FormatError,
+                  a[k].allFinite() && b[k].allFinite() && a[k].minCoeff() >= -0.5 &&
+                      b[k].minCoeff() >= -0.5 && a[k].maxCoeff() < kMaxTruthPixel &&
+                      b[k].maxCoeff() < kMaxTruthPixel,
+                  where << ": point " << k << " (A " << a[k].transpose() << ", B "
+                        << b[k].transpose()
+                        << ") is not a pixel position on a detector (finite, -0.5 to "
+                        << kMaxTruthPixel << " px)");
     Correspondence c;
     c.a = a[k];
     c.b = b[k];

@@ -4,11 +4,11 @@
 ///
 /// The files and their layout belong to the dataset room (dataset/layout.hpp, writer.hpp);
 /// the run around this (resume, shards, merge) is pipeline/dataset_run.hpp.
-/// Every file but timings.json depends only on (parameters, seed, patient id). A patient is made
+/// Every file depends only on (parameters, seed, patient id). A patient is made
 /// in a staging folder and renamed to patients/<id>/ when complete (done.json last), so a
 /// patient's folder is there whole or not at all, whatever stops the run (a bad input, a full
 /// disk, a kill); a finished patient is skipped on restart, and shards write disjoint patients
-/// whose union is byte-identical to one run (timings.json aside).
+/// whose union is byte-identical to one run.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -273,7 +273,7 @@ class Stopwatch {
 }  // namespace detail
 
 /// Wall-clock seconds of one patient's stages (summed over both systems). They vary run to run,
-/// so they go to the log and patients/<id>/timings.json, never to done.json or the manifest.
+/// so they go to the log (and gimm-dataset --timings FILE, outside the dataset), never into it.
 struct PatientTimings {
   double read = 0;         ///< CT and label files (or building the phantom), grid check
   double split = 0;        ///< connected components, LCA/RCA split
@@ -645,12 +645,12 @@ inline nlohmann::json absent_system_record() {
 }
 
 /// Generates one patient into out/patients/<id>/ and returns its record (also written as
-/// done.json, last, with "run" added). The stage timings go to patients/<id>/timings.json and
-/// to `timings` when given. Throws on bad input (the caller records the error) and WriteError
-/// when a file cannot be written. The files are made in patients/<id>.tmp.<host>.<pid>/ and that
-/// folder replaces patients/<id>/ (an unfinished one a killed run left) when complete; on any
-/// error it is removed, and patients/<id>/ is left as it was.
-/// The data flow of shared/docs/design.md, one named step per arrow.
+/// done.json, last, with "run" added). The stage timings go to `timings` when given, never into
+/// the dataset (they vary run to run; the dataset is byte-reproducible). Throws on bad input (the
+/// caller records the error) and WriteError when a file cannot be written. The files are made in
+/// patients/<id>.tmp.<host>.<pid>/ and that folder replaces patients/<id>/ (an unfinished one a
+/// killed run left) when complete; on any error it is removed, and patients/<id>/ is left as it
+/// was. The data flow of shared/docs/design.md, one named step per arrow.
 inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOptions& o,
                                        const std::filesystem::path& out,
                                        PatientTimings* timings = nullptr) {
@@ -738,13 +738,6 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   t.writes += stage.lap();
   record["status"] = "ok";
   t.total = whole.lap();
-  // Before done.json, which is written last: a finished patient always has its timings.
-  nlohmann::json timing_file = t.to_json();
-  timing_file["id"] = src.id;
-  timing_file["note"] =
-      "wall-clock seconds of the run that made this patient; they vary run to "
-      "run (docs/dataset.md)";
-  writer.write_timings(src.id, timing_file);
   nlohmann::json stored = record;
   stored["run"] = patient_run(src, o);
   writer.write_done_record(src.id, stored);

@@ -20,11 +20,13 @@
 ///   run.shard = gimm::resolve_shard("");          // Slurm / Kubernetes indices, or 0 of 1
 ///   const auto summary = gimm::run_dataset(sources, options, "out/", run);
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -42,6 +44,9 @@ struct DatasetRunOptions {
   bool quiet = false;         ///< no progress line, no per-patient lines
   std::string export_format;  ///< "" or "reference" (OUT/reference; not with shards)
   nlohmann::json input;       ///< what the patients came from, for the manifest
+  /// "" or a file outside `out` that gets one JSON line per patient made: its id and stage
+  /// seconds (appended; they vary run to run, so they stay out of the dataset).
+  std::filesystem::path timings_file;
 };
 
 struct DatasetRunSummary {
@@ -125,6 +130,12 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     detail::check_export_ids(run.export_format, ids);
     detail::check_export_views(run.export_format, options.to_json());
   }
+  GIMM_CHECK(
+      run.timings_file.empty() || !path_is_within(run.timings_file, out),
+      "the timings file " << run.timings_file.string() << " lies inside the dataset "
+                          << out.string()
+                          << ": the dataset is byte-reproducible and wall-clock seconds are not; "
+                             "write them elsewhere");
   assign_splits(sources, options);
   const DatasetLayout layout(out);
   CreatedFolders folders;  // removed again (while empty) if the run fails
@@ -133,6 +144,13 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     const fs::path probe = out / (".write-test." + process_tag());
     write_file_atomic(probe, std::string("ok"));
     fs::remove(probe);
+  }
+  std::ofstream timings;
+  if (!run.timings_file.empty()) {
+    timings.open(run.timings_file, std::ios::app);
+    GIMM_CHECK_AS(WriteError, timings.good(),
+                  "cannot open the timings file '" << run.timings_file.string()
+                                                   << "' for appending: " << std::strerror(errno));
   }
   std::vector<const PatientSource*> mine;
   for (std::size_t k = 0; k < sources.size(); ++k)
@@ -161,6 +179,13 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
         record = generate_patient(*src, options, out, &t);
         summary.made += t;
         if (!run.quiet) progress.log("gimm-dataset: patient " + src->id + ": " + t.summary());
+        if (timings.is_open()) {
+          nlohmann::json line = t.to_json();
+          line["id"] = src->id;
+          timings << line.dump() << "\n" << std::flush;
+          GIMM_CHECK_AS(WriteError, timings.good(),
+                        "cannot write the timings file '" << run.timings_file.string() << "'");
+        }
         const std::string warning = dropped_voxels_warning(record, options);
         if (!warning.empty()) progress.log("gimm-dataset: warning: " + warning);
       } catch (const WriteError&) {
@@ -173,7 +198,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
       } catch (const std::exception& e) {
         record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
         ++summary.failed;
-        progress.log("gimm-dataset: patient " + src->id + " failed: " + e.what());
+        progress.log("error: gimm-dataset: patient " + src->id + " failed: " + e.what());
       }
     }
     patients.push_back(record);

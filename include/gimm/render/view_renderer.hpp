@@ -180,6 +180,7 @@ class ViewRenderer {
   }
 
   void check_options(const Volume<std::uint8_t>* vessels, const std::string& name) const {
+    options_.recipe.validate(name + ": recipe");
     GIMM_CHECK(
         std::isfinite(options_.step_mm) && options_.step_mm >= 0,
         name << ": step_mm must be >= 0 (0: the smallest voxel spacing), got " << options_.step_mm);
