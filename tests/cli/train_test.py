@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""tools/train/train.py end to end on a tiny dataset: two CPU ranks (gloo, launched by hand as
-docs/training.md says) train a few steps and stop together; a run stopped half way and resumed
+"""tools/train/train.py end to end on a tiny dataset: two CPU ranks (DistributedDataParallel over
+gloo, launched by hand as docs/training.md says) train a few steps and stop together; a run stopped half way and resumed
 ends with the same weights as an uninterrupted one. Exits 77 (skipped) without PyTorch.
 
     train_test.py EXAMPLES_DIR TMP_DIR
@@ -98,6 +98,13 @@ assert bad.returncode != 0 and "no_film=False" in out and init_ckpt in out, out
 missing = train("bad_init", "--init", os.path.join(TMP, "nothing.pt"))
 out, _ = missing.communicate(timeout=600)
 assert missing.returncode != 0 and "nothing.pt does not exist" in out, out
+
+# --device cuda without a GPU: refused by name before any work (auto falls back to the CPU).
+if not torch.cuda.is_available():
+    gpu = train("no_gpu", "--device", "cuda")
+    out, _ = gpu.communicate(timeout=600)
+    assert gpu.returncode != 0 and "--device cuda" in out and "no CUDA GPU" in out, out
+    assert not os.path.exists(os.path.join(TMP, "no_gpu", "checkpoint.pt"))
 
 # On-the-fly pairs (rendered_pairs.py through the gimm module): trains, validates on the dataset's
 # val split, and two runs with one seed give the same weights.

@@ -118,12 +118,13 @@ class ResNetFPN(nn.Module):
         return coarse, fine
 
 
-def sine_encoding(channels, height, width):
+def sine_encoding(channels, height, width, device=None):
     """LoFTR's 2D sine encoding, [channels, height, width]; positions count from 1."""
-    pe = torch.zeros(channels, height, width)
-    y = torch.ones(height, width).cumsum(0)[None]
-    x = torch.ones(height, width).cumsum(1)[None]
-    div = torch.exp(torch.arange(0, channels // 2, 2).float() * (-math.log(10000.0) / (channels // 2)))
+    pe = torch.zeros(channels, height, width, device=device)
+    y = torch.ones(height, width, device=device).cumsum(0)[None]
+    x = torch.ones(height, width, device=device).cumsum(1)[None]
+    div = torch.exp(torch.arange(0, channels // 2, 2, device=device).float()
+                    * (-math.log(10000.0) / (channels // 2)))
     div = div[:, None, None]
     pe[0::4] = torch.sin(x * div)
     pe[1::4] = torch.cos(x * div)
@@ -201,8 +202,8 @@ class FiLM(nn.Module):
         return (1 + gamma)[:, :, None, None] * feat + beta[:, :, None, None]
 
 
-def border_mask(h, w, border):
-    keep = torch.zeros(h, w, dtype=torch.bool)
+def border_mask(h, w, border, device=None):
+    keep = torch.zeros(h, w, dtype=torch.bool, device=device)
     keep[border:h - border, border:w - border] = True
     return keep.reshape(-1)
 
@@ -212,16 +213,16 @@ def extract_windows(fine, batch, rows, cols, window, stride):
     zero padded. Returns [M, window*window, C], window pixels in row-major order."""
     half = window // 2
     padded = F.pad(fine, (half, half, half, half))
-    offsets = torch.arange(window)
+    offsets = torch.arange(window, device=fine.device)
     ry = (rows * stride)[:, None] + offsets[None, :]          # [M, W] rows in padded coords
     cx = (cols * stride)[:, None] + offsets[None, :]          # [M, W]
     win = padded[batch[:, None, None], :, ry[:, :, None], cx[:, None, :]]  # [M, W, W, C]
     return win.reshape(rows.shape[0], window * window, fine.shape[1])
 
 
-def window_grid(window):
+def window_grid(window, device=None):
     """Normalised window offsets in [-1, 1], row-major: (gx, gy), each [window*window]."""
-    grid = torch.linspace(-1.0, 1.0, window)
+    grid = torch.linspace(-1.0, 1.0, window, device=device)
     gy, gx = torch.meshgrid(grid, grid, indexing="ij")
     return gx.reshape(-1), gy.reshape(-1)
 
@@ -259,7 +260,7 @@ class GimmMatcher(nn.Module):
         coarse, fine = self.backbone(torch.cat([image0, image1], 0))
         c = coarse.shape[1]
         hc, wc = h // 8, w // 8
-        coarse = coarse + sine_encoding(c, hc, wc)[None]
+        coarse = coarse + sine_encoding(c, hc, wc, coarse.device)[None]
         if self.film is not None:
             coarse = self.film(coarse, torch.cat([class0, class1]))
         tokens = coarse.flatten(2).transpose(1, 2)                 # [2B, L, C]
@@ -270,7 +271,7 @@ class GimmMatcher(nn.Module):
 
     def coarse_matches(self, conf, hc, wc):
         """Thresholded mutual nearest neighbours away from the border: (b, i, j) ids."""
-        keep = border_mask(hc, wc, self.cfg["border"])
+        keep = border_mask(hc, wc, self.cfg["border"], conf.device)
         mask = (conf > self.cfg["threshold"]) & keep[None, :, None] & keep[None, None, :]
         mask = (mask & (conf == conf.max(dim=2, keepdim=True)[0])
                 & (conf == conf.max(dim=1, keepdim=True)[0]))
@@ -289,13 +290,13 @@ class GimmMatcher(nn.Module):
                                             cwin[:, None, :].expand(-1, win * win, -1)], -1))
         m = i_ids.shape[0]
         g0, g1 = self.fine(merged[:m], merged[m:])
-        gx, gy = window_grid(win)
+        gx, gy = window_grid(win, fine.device)
         if self.anchor is not None:
             heat0 = F.softmax(self.anchor(g0).squeeze(-1), dim=1)
             ex0, ey0, _ = expectation(heat0, gx, gy)
             center = torch.einsum("mr,mrc->mc", heat0, g0)
         else:
-            ex0 = ey0 = torch.zeros(m)
+            ex0 = ey0 = torch.zeros(m, device=fine.device)
             center = g0[:, (win * win) // 2, :]
         heat = F.softmax(torch.einsum("mc,mrc->mr", center, g1) / cf ** 0.5, dim=1)
         ex, ey, std = expectation(heat, gx, gy)
@@ -308,7 +309,8 @@ class GimmMatcher(nn.Module):
     def forward(self, image0, image1, class0=0, class1=0):
         """image0, image1: [1, 1, H, W] in [0, 1], H and W multiples of 8. Returns a dict."""
         def as_classes(c):
-            return c.reshape(1).long() if isinstance(c, torch.Tensor) else torch.tensor([c])
+            return c.reshape(1).long().to(image0.device) if isinstance(c, torch.Tensor) \
+                else torch.tensor([c], device=image0.device)
         f0, f1, conf, fine, (hc, wc) = self.coarse_stage(image0, image1, as_classes(class0),
                                                          as_classes(class1))
         b_ids, i_ids, j_ids = self.coarse_matches(conf, hc, wc)
@@ -320,7 +322,7 @@ class GimmMatcher(nn.Module):
 
 def fold_free_state_dict(model):
     """Tensors to save: every parameter and BN buffer (the C++ loader folds BN into convs)."""
-    return {k: v.detach().float().contiguous() for k, v in model.state_dict().items()
+    return {k: v.detach().cpu().float().contiguous() for k, v in model.state_dict().items()
             if not k.endswith("num_batches_tracked")}
 
 

@@ -76,7 +76,7 @@ def fine_targets(truths, b_ids, i_ids, j_ids, points0, wc, reach):
     b_offset = torch.zeros(m, 2)
     has_a = torch.zeros(m, dtype=torch.bool)
     has_b = torch.zeros(m, dtype=torch.bool)
-    pred = points0.detach().numpy()
+    pred = points0.detach().cpu().numpy()
     for n in range(m):
         t = truths[int(b_ids[n])]
         idx = t.labels_in(int(i_ids[n]))
@@ -90,7 +90,8 @@ def fine_targets(truths, b_ids, i_ids, j_ids, points0, wc, reach):
         if np.abs(off).max() <= 1.0:
             b_offset[n] = torch.from_numpy(off.astype(np.float32))
             has_b[n] = True
-    return a_target, has_a, b_offset, has_b
+    device = points0.device  # built on the CPU (numpy labels), used where the points are
+    return a_target.to(device), has_a.to(device), b_offset.to(device), has_b.to(device)
 
 
 def fine_losses(out, a_target, has_a, b_offset, has_b, reach):

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Trains the GIMM matcher on a gimm-dataset folder, on CPU (or GPU), resumably.
+"""Trains the GIMM matcher on a gimm-dataset folder, on CPU or GPU, resumably.
 
     /usr/bin/python3 tools/train/train.py --dataset DATA --run RUN [--minutes 90] [--resume]
 
@@ -8,10 +8,13 @@ best.safetensors (the best validation Prec@3px with coverage >= 0.5, else the be
 last.safetensors, log.jsonl (one JSON object per logged step and per validation) and config.json.
 --resume continues a run exactly: same step, schedule, data order and random streams.
 
-Several CPU processes (gloo): set WORLD_SIZE, RANK, LOCAL_RANK, MASTER_ADDR
-and MASTER_PORT by hand for each process (torchrun from Debian's torch 1.13 fails on Python
-3.11); docs/training.md has the commands. Each rank takes every WORLD_SIZE-th pair of the epoch's
-order; gradients are averaged by one all-reduce per step; ranks decide to stop together.
+--device auto (the default) trains on the GPU when PyTorch sees one (CUDA), else on the CPU.
+Several processes: launch with torchrun (torchrun --nproc_per_node=N train.py ...), or set
+WORLD_SIZE, RANK, LOCAL_RANK, MASTER_ADDR and MASTER_PORT by hand for each process (Debian's
+torch 1.13 torchrun fails on Python 3.11); docs/training.md has the commands. The model is
+wrapped in DistributedDataParallel (NCCL on GPUs, rank r on GPU LOCAL_RANK; gloo on CPUs): each
+rank takes every WORLD_SIZE-th pair of the epoch's order, gradients are averaged in backward,
+and ranks decide to stop together.
 """
 import argparse
 import json
@@ -62,6 +65,8 @@ def parse_args(argv=None):
     p.add_argument("--max-fine", type=int, default=128, help="fine matches per pair, at most")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=0, help="torch threads (0: cores / ranks)")
+    p.add_argument("--device", default="auto", choices=["auto", "cpu", "cuda"],
+                   help="auto: CUDA when PyTorch sees a GPU, else the CPU")
     p.add_argument("--log-every", type=int, default=20)
     p.add_argument("--checkpoint-minutes", type=float, default=5.0)
     p.add_argument("--val-minutes", type=float, default=15.0)
@@ -90,28 +95,46 @@ def blas_in_use():
 
 # ---- distributed -------------------------------------------------------------------------
 
-def init_ranks():
+def pick_device(choice):
+    if choice == "cuda" and not torch.cuda.is_available():
+        raise SystemExit("train: --device cuda: PyTorch sees no CUDA GPU (torch.cuda.is_available()"
+                         " is False)")
+    return "cuda" if choice == "cuda" or (choice == "auto" and torch.cuda.is_available()) \
+        else "cpu"
+
+
+def init_ranks(kind):
+    """(rank, world, device): one process per GPU (LOCAL_RANK's) with NCCL, or CPUs with gloo."""
     world = int(os.environ.get("WORLD_SIZE", "1"))
+    device = torch.device("cpu")
+    if kind == "cuda":
+        device = torch.device("cuda", int(os.environ.get("LOCAL_RANK", "0")))
+        torch.cuda.set_device(device)
     if world > 1:
-        dist.init_process_group("gloo")  # the model runs on the CPU (no GPU path yet)
-        return dist.get_rank(), world
-    return 0, 1
+        dist.init_process_group("nccl" if kind == "cuda" else "gloo")
+        return dist.get_rank(), world, device
+    return 0, 1, device
 
 
-def all_reduce_mean(tensors, world):
-    if world > 1:
-        for t in tensors:
-            dist.all_reduce(t)
-            t /= world
-
-
-def all_stop(stop, world):
+def all_stop(stop, world, device):
     """True on every rank when any rank wants to stop."""
     if world == 1:
         return stop
-    flag = torch.tensor([1.0 if stop else 0.0])
+    flag = torch.tensor([1.0 if stop else 0.0], device=device)
     dist.all_reduce(flag, op=dist.ReduceOp.MAX)
     return bool(flag.item())
+
+
+class TrainStep(torch.nn.Module):
+    """One training step's loss as a module's forward, so DistributedDataParallel (which hooks
+    forward) can wrap it: the step calls the model's stages, not its inference forward."""
+
+    def __init__(self, model, max_fine):
+        super().__init__()
+        self.model, self.max_fine = model, max_fine
+
+    def forward(self, batch):
+        return train_step(self.model, batch, self.max_fine)
 
 
 # ---- data --------------------------------------------------------------------------------
@@ -141,13 +164,15 @@ def pad8(image):
     return F.pad(image, (0, (-w) % 8, 0, (-h) % 8))
 
 
-def make_batch(samples, truths, gen, train=True):
+def make_batch(samples, truths, gen, train=True, device="cpu"):
+    """Augmented on the CPU (the generator's stream does not depend on the device), then moved."""
     prep = (lambda x: augment(x, gen)) if train else (lambda x: x.float())
     a = torch.stack([pad8(prep(s.image_a)) for s in samples])[:, None]
     b = torch.stack([pad8(prep(s.image_b)) for s in samples])[:, None]
     ca = torch.tensor([s.class_a for s in samples])
     cb = torch.tensor([s.class_b for s in samples])
-    return a, b, ca, cb, [truths[id(s)] for s in samples]
+    return a.to(device), b.to(device), ca.to(device), cb.to(device), \
+        [truths[id(s)] for s in samples]
 
 
 RENDERED_SEED_BASE = 10 ** 9  # gimm-dataset's phantoms: seed * 1000003 + index, far below
@@ -184,12 +209,13 @@ def train_step(model, batch, max_fine):
     # Fine matches: the ground-truth coarse matches, padded with predicted ones (LoFTR), at most
     # max_fine per pair.
     with torch.no_grad():
-        pb, pi, pj = model.coarse_matches(conf, hc, wc)
+        pb, pi, pj = (x.cpu() for x in model.coarse_matches(conf, hc, wc))
+        is_positive = positive.cpu()
     b_ids, i_ids, j_ids = [], [], []
     for n in range(len(truths)):
         gi, gj = gt_i[n], gt_j[n]
         sel = pb == n
-        extra = [(int(i), int(j)) for i, j in zip(pi[sel], pj[sel]) if not positive[n, i, j]]
+        extra = [(int(i), int(j)) for i, j in zip(pi[sel], pj[sel]) if not is_positive[n, i, j]]
         pairs = list(zip(gi.tolist(), gj.tolist())) + extra
         pairs = pairs[:max_fine]
         b_ids += [n] * len(pairs)
@@ -198,7 +224,8 @@ def train_step(model, batch, max_fine):
     b_ids, i_ids, j_ids = (torch.tensor(x, dtype=torch.long) for x in (b_ids, i_ids, j_ids))
     reach = (model.cfg["window"] // 2) * 2
     if len(i_ids):
-        out = model.fine_stage(f0, f1, fine, b_ids, i_ids, j_ids, wc)
+        on = [x.to(conf.device) for x in (b_ids, i_ids, j_ids)]
+        out = model.fine_stage(f0, f1, fine, *on, wc)
         targets = fine_targets(truths, b_ids, i_ids, j_ids, out["points0"], wc, reach)
         loss_a, loss_b = fine_losses(out, *targets, reach)
         if model.anchor is None:
@@ -235,11 +262,14 @@ def validate(model, pairs, threshold, k=20):
     saved = model.cfg["threshold"]
     model.cfg["threshold"] = threshold
     errors, slots, seconds = [], 0, 0.0
+    device = next(model.parameters()).device
     for s in pairs:
-        a, b = pad8(s.image_a.float())[None, None], pad8(s.image_b.float())[None, None]
+        a = pad8(s.image_a.float())[None, None].to(device)
+        b = pad8(s.image_b.float())[None, None].to(device)
         t0 = time.perf_counter()
         out = model(a, b, s.class_a, s.class_b)
         seconds += time.perf_counter() - t0
+        out = {key: out[key].cpu() for key in ("mconf", "points0", "points1")}
         order = torch.argsort(-out["mconf"], stable=True)[:k]
         su, sv = s.scale
         back = lambda p: np.stack([(p[:, 0] + 0.5) * su - 0.5, (p[:, 1] + 0.5) * sv - 0.5], 1)  # noqa
@@ -313,7 +343,7 @@ def load_init(model, args):
     if not os.path.isfile(args.init):
         raise SystemExit(f"train: --init: {args.init} does not exist")
     try:
-        state = torch.load(args.init)
+        state = torch.load(args.init, map_location="cpu")
         saved = state["args"]
         weights = state["model"]
     except Exception as e:  # torch raises several types for a file that is not a checkpoint
@@ -328,7 +358,7 @@ def load_init(model, args):
 
 def main(argv=None):
     args = parse_args(argv)
-    rank, world = init_ranks()
+    rank, world, device = init_ranks(pick_device(args.device))
     torch.set_num_threads(args.threads or max(1, (os.cpu_count() or 1) // world))
     os.makedirs(args.run, exist_ok=True)
     ckpt_path = os.path.join(args.run, "checkpoint.pt")
@@ -336,16 +366,17 @@ def main(argv=None):
     if args.resume:
         if not os.path.isfile(ckpt_path):
             raise SystemExit(f"train: --resume: {ckpt_path} does not exist")
-        state = torch.load(ckpt_path)
+        state = torch.load(ckpt_path, map_location="cpu")
         # Where the data and run live may change (a regenerated, byte-identical dataset); what
         # was trained on and how may not.
         keep = {"minutes", "resume", "val_minutes", "checkpoint_minutes", "threads", "stop_at",
-                "dataset", "run"}
+                "dataset", "run", "device"}
         saved = state["args"]
         args = argparse.Namespace(**{**saved, **{k: getattr(args, k) for k in keep}})
     if rank == 0:
-        print(f"train: BLAS {blas_in_use()}; {torch.get_num_threads()} threads x {world} ranks",
-              flush=True)
+        where = f"GPU {torch.cuda.get_device_name(device)}" if device.type == "cuda" else \
+            f"CPU, BLAS {blas_in_use()}; {torch.get_num_threads()} threads"
+        print(f"train: {where} x {world} ranks", flush=True)
     cfg = dict(DEFAULT_CONFIG, widths=args.widths, coarse_layers=args.coarse_layers,
                fine_layers=args.fine_layers, film=not args.no_film, anchor=not args.no_anchor,
                coarse_heads=4, fine_heads=2 if args.widths[0] % 4 else 4)
@@ -355,6 +386,7 @@ def main(argv=None):
         with torch.no_grad():  # an untrained FiLM adds one large offset to every token
             model.film.mlp[2].weight.mul_(0.1)
             model.film.mlp[2].bias.mul_(0.1)
+    model.to(device)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=args.weight_decay)
     t_load = time.time()
     # The stream restarts from (seed, rank, step) on --resume: deterministic, not a replay.
@@ -388,6 +420,11 @@ def main(argv=None):
     elif args.init:
         cpu0 = load_init(model, args)
     model.train()
+    # DDP averages the gradients in backward (and starts every rank from rank 0's weights).
+    step_module = TrainStep(model, args.max_fine)
+    if world > 1:
+        step_module = torch.nn.parallel.DistributedDataParallel(
+            step_module, device_ids=[device.index] if device.type == "cuda" else None)
     start = time.time()
     cpu_start = time.process_time()
     last_ckpt = last_val = start
@@ -417,7 +454,7 @@ def main(argv=None):
     while True:
         out_of_time = (time.time() - start > args.minutes * 60 or step >= args.steps
                        or (args.stop_at and step >= args.stop_at))
-        if all_stop(out_of_time, world):
+        if all_stop(out_of_time, world, device):
             break
         if stream:
             samples = [next(stream) for _ in range(args.batch)]
@@ -428,14 +465,12 @@ def main(argv=None):
                 order = epoch_order(len(train), args.seed, epoch)
             samples = [train[i] for i in order[pos + rank:pos + per_step:world]]
             pos += per_step
-        batch = make_batch(samples, truths, gen)
+        batch = make_batch(samples, truths, gen, device=device)
         for g in opt.param_groups:
             g["lr"] = lr_at(step, args)
-        loss, terms = train_step(model, batch, args.max_fine)
+        loss, terms = step_module(batch)
         opt.zero_grad(set_to_none=False)
         loss.backward()
-        grads = [p.grad for p in model.parameters() if p.grad is not None]
-        all_reduce_mean(grads, world)
         norm = torch.nn.utils.clip_grad_norm_(model.parameters(), args.clip)
         opt.step()
         step += 1
