@@ -134,12 +134,14 @@ int main(int argc, char** argv) {
                           {"mu_water_per_mm", recipe.mu_water},
                           {"png", "Beer-Lambert intensity exp(-line integral), min-max to 16 bit"},
                           {"npy", "float32 line integrals (rows, cols), unitless"}};
+    gimm::IntensityWindow window;
+    const gimm::Image<std::uint16_t> png =
+        gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals), &window);
+    camera_json["intensity_window"] = gimm::intensity_window_json(window.lo, window.hi);
     // All or nothing: the files are written to temporaries and renamed into place together, so
     // a failure (a full disk) leaves the files of an earlier run at PREFIX as they were.
     gimm::write_all_or_nothing([&](const auto& at) {
       gimm::write_npy(at(out_prefix + ".npy"), line_integrals);
-      const gimm::Image<std::uint16_t> png =
-          gimm::to_uint16_min_max(gimm::beer_lambert(line_integrals));
       gimm::write_png(at(out_prefix + ".png"), png);
       gimm::write_json_file(at(out_prefix + ".camera.json"), camera_json);
       if (dicom) {

@@ -47,6 +47,7 @@
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "gimm/core/progress.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
@@ -78,7 +79,8 @@ MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader&
                           const std::vector<std::string>& ids, bool use_cameras, bool formed,
                           const std::filesystem::path& pred_dir,
                           const gimm::CameraError& camera_error,
-                          const gimm::ImageDegradation& degradation, std::uint64_t seed) {
+                          const gimm::ImageDegradation& degradation, std::uint64_t seed,
+                          gimm::ProgressLine& progress) {
   const auto start = std::chrono::steady_clock::now();
   MatchedCounts counts;
   for (std::size_t n = 0; n < ids.size(); ++n) {
@@ -128,9 +130,11 @@ MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader&
     counts.without_F += !matches.F;
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "\rgimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
-                 ids.size(), seconds / double(n + 1),
-                 seconds / double(n + 1) * double(ids.size() - n - 1));
+    char line[160];
+    std::snprintf(line, sizeof line, "gimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
+                  ids.size(), seconds / double(n + 1),
+                  seconds / double(n + 1) * double(ids.size() - n - 1));
+    progress.show(line);
   }
   return counts;
 }
@@ -146,18 +150,19 @@ int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
   const auto ids = reader.pair_ids(split);
   GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
   MatchedCounts counts;
+  gimm::ProgressLine progress(false);
   // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
   // (a full disk) leaves `out` as it was.
   try {
     gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
       counts = match_pairs(matcher, reader, ids, use_cameras, formed, staged, camera_error,
-                           degradation, seed);
+                           degradation, seed, progress);
     });
   } catch (...) {
-    std::fprintf(stderr, "\n");  // the progress line ends before the error is printed
+    progress.finish();  // the progress line ends before the error is printed
     throw;
   }
-  std::fprintf(stderr, "\n");
+  progress.finish();
   std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), counts.matches,
               out.c_str());
   // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair

@@ -16,13 +16,21 @@ integer coordinates, points (u, v) = (column, row), world points in mm (LPS).
 import argparse
 import sys
 
-import matplotlib
-
+try:
+    import matplotlib
+    import numpy as np
+except ImportError as e:  # another Python than the one the packages were installed for
+    sys.exit(f"walkthrough.py: {e.name} is missing for {sys.executable}: run it with the Python "
+             "that has numpy and matplotlib (Debian's /usr/bin/python3 after "
+             "scripts/install-deps.sh)")
 matplotlib.use("Agg")  # files only: no display needed
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
 
-import gimm  # noqa: E402
+try:
+    import gimm  # noqa: E402
+except ImportError:
+    sys.exit(f"walkthrough.py: the gimm module is not importable by {sys.executable}: set "
+             "PYTHONPATH=build/python (the README's build) and use the Python it was built for")
 
 TOP_K = 20
 

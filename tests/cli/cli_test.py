@@ -80,6 +80,14 @@ check(png[:8] == b"\x89PNG\r\n\x1a\n" and png[24] == 16, "16-bit PNG")
 camj = json.load(open(out + ".camera.json"))
 check(camj["image_size"] == [128, 160] or camj["image_size"] == {"rows": 128, "cols": 160}
       or camj["image_size"] == [160, 128], f"camera image_size {camj['image_size']}")
+# The PNG's window is recorded (as the dataset's views record theirs): it maps the 16-bit values
+# back to the intensity exp(-line integral) of the .npy.
+win = camj.get("intensity_window", {})
+value = np.asarray(Image.open(out + ".png"), dtype=np.float64)
+back = win.get("min", 0) + (win.get("max", 0) - win.get("min", 0)) * value / 65535
+worst = float(np.abs(back - np.exp(-arr.astype(np.float64))).max()) if win else float("inf")
+check(worst <= (win.get("max", 1) - win.get("min", 0)) / 65535,
+      f"gimm-drr intensity_window {win}: the PNG maps back to exp(-npy) within {worst}")
 
 bad = os.path.join(TMP, "bad.nii.gz")
 open(bad, "wb").write(open(os.path.join(ph, "3.img.nii.gz"), "rb").read()[:5000])

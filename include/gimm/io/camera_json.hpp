@@ -152,4 +152,14 @@ inline Camerad camera_from_json(const nlohmann::json& j, const std::string& wher
   return camera;
 }
 
+/// How a view's 16-bit PNG maps back to intensity (camera.json "intensity_window": the
+/// dataset's views and gimm-drr's).
+/// `lo`, `hi`: the window's ends (render/drr.hpp's IntensityWindow).
+inline nlohmann::json intensity_window_json(double lo, double hi) {
+  return {{"min", lo},
+          {"max", hi},
+          {"png", "intensity = min + (max - min) * value / 65535"},
+          {"intensity", "Beer-Lambert exp(-line integral), I0 = 1"}};
+}
+
 }  // namespace gimm

@@ -448,14 +448,6 @@ inline nlohmann::json view_camera_json(const CArm& carm, const SampledView& view
   return j;
 }
 
-/// How a view's 16-bit PNG maps back to intensity (camera.json "intensity_window").
-inline nlohmann::json intensity_window_json(const IntensityWindow& w) {
-  return {{"min", w.lo},
-          {"max", w.hi},
-          {"png", "intensity = min + (max - min) * value / 65535"},
-          {"intensity", "Beer-Lambert exp(-line integral), I0 = 1"}};
-}
-
 /// The image-formation stage of a system's views: the ranges each view's formation is drawn
 /// from, and the system's stream (view v draws from stream.fork(v): the views' formations are
 /// independent of each other and of every other random choice of the patient).
@@ -571,7 +563,7 @@ inline SystemViews render_system_views(const ViewRenderer& renderer, const ViewP
                      [&](const Eigen::Vector3d& X) { return renderer.unoccluded(camera, X); });
       IntensityWindow window;
       Image<std::uint16_t> image = to_uint16_min_max(view.intensity(), &window);
-      cj["intensity_window"] = intensity_window_json(window);
+      cj["intensity_window"] = intensity_window_json(window.lo, window.hi);
       FormedAngiogram formed;
       if (formation) formed = form_view(view, carm, *formation, v, cj);
       ViewFiles files{std::move(image),

@@ -32,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "gimm/core/progress.hpp"
 #include "gimm/dataset/run.hpp"
 #include "gimm/dataset/writer.hpp"
 #include "gimm/pipeline/dataset.hpp"
@@ -66,29 +67,6 @@ inline void check_export_views(const std::string& format, const nlohmann::json& 
   if (!format.empty()) reference_format::check_views_exportable(parameters, "--export " + format);
 }
 
-/// One line on stderr that overwrites itself, with log lines printed above it.
-class ProgressLine {
- public:
-  explicit ProgressLine(bool quiet) : quiet_(quiet) {}
-  void log(const std::string& text) {
-    if (width_ > 0)
-      std::fprintf(stderr, "\r%-*s\n", width_, text.c_str());
-    else
-      std::fprintf(stderr, "%s\n", text.c_str());
-  }
-  void show(const std::string& text) {
-    if (quiet_) return;
-    std::fprintf(stderr, "\r%s", text.c_str());
-    width_ = static_cast<int>(text.size());
-  }
-  void finish() {
-    if (!quiet_) std::fprintf(stderr, "\n");
-  }
-
- private:
-  bool quiet_;
-  int width_ = 0;
-};
 }  // namespace detail
 
 /// The run's own files, all or none: the manifest and, for a whole run (not a shard), the split
@@ -165,7 +143,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   DatasetRunSummary summary;
   nlohmann::json patients = nlohmann::json::array();
   const auto t0 = std::chrono::steady_clock::now();
-  detail::ProgressLine progress(run.quiet);
+  ProgressLine progress(run.quiet);
   std::size_t done = 0;
   for (std::size_t m = 0; m < mine.size(); ++m) {
     const PatientSource* src = mine[m];
