@@ -1,6 +1,6 @@
-"""tools/train/rendered_pairs.py: the on-the-fly training source gives what gimm-dataset writes
-for the same patient and view angles (images, masks, classes, dense labels), and its stream is
-deterministic. Skipped without PyTorch (scripts/install-deps.sh train)."""
+"""gimm.torch (and tools/train/rendered_pairs.py over it): the on-the-fly training source gives
+what gimm-dataset writes for the same patient and view angles (images, masks, classes, dense
+labels), its stream is deterministic, and DataLoader batches it with workers. Skipped without PyTorch (scripts/install-deps.sh train)."""
 import glob
 import itertools
 import json
@@ -82,6 +82,40 @@ class RenderedPairsTest(unittest.TestCase):
         for ps in revisited:
             self.assertFalse(np.array_equal(ps[0].image_a.float(), ps[1].image_a.float()))
         self.assertNotEqual([p.a_full.shape for p in first], [p.a_full.shape for p in other])
+
+    def test_dataloader_batches_dicts_with_workers(self):
+        """gimm.torch: DataLoader(batch_size=4, num_workers=2) with collate_pairs yields batches
+        of tensors; the two workers draw different views; the same seed gives the same batches."""
+        from torch.utils.data import DataLoader
+
+        from gimm.torch import RenderedPairs, collate_pairs
+
+        def batches(seed):
+            pairs = RenderedPairs([5, 6], size=32, rows=48, cols=48, pixel_mm=5.0, seed=seed)
+            loader = DataLoader(pairs, batch_size=4, num_workers=2, collate_fn=collate_pairs)
+            return list(itertools.islice(iter(loader), 3))
+
+        first = batches(1)
+        b = first[0]
+        self.assertEqual(tuple(b["image_a"].shape), (4, 1, 32, 32))
+        self.assertEqual(b["image_a"].dtype, torch.float32)
+        self.assertEqual(tuple(b["class_a"].shape), (4,))
+        self.assertEqual(tuple(b["mask_a"].shape), (4, 48, 48))
+        self.assertEqual(tuple(b["scale"].shape), (4, 2))
+        self.assertEqual(len(b["points_a"]), 4)
+        self.assertEqual(len(b["name"]), 4)
+        for pa, pb, w in zip(b["points_a"], b["points_b"], b["world_mm"]):
+            self.assertEqual(pa.shape[1], 2)
+            self.assertEqual(len(pa), len(pb))
+            self.assertEqual(len(pa), len(w))
+        # Workers take turns by batch: batch 0 from worker 0, batch 1 from worker 1, whose
+        # streams differ.
+        self.assertNotEqual(first[0]["name"] + [float(first[0]["image_a"].sum())],
+                            first[1]["name"] + [float(first[1]["image_a"].sum())])
+        again = batches(1)
+        for x, y in zip(first, again):
+            self.assertEqual(x["name"], y["name"])
+            self.assertTrue(torch.equal(x["image_a"], y["image_a"]))
 
     def test_bad_sources_are_named(self):
         from rendered_pairs import RenderedPairs
