@@ -17,9 +17,15 @@ import shutil
 from pybind11.setup_helpers import ParallelCompile, Pybind11Extension, build_ext
 from setuptools import setup
 from setuptools.command.build_py import build_py
+from setuptools.command.sdist import sdist
 
 HERE = pathlib.Path(__file__).resolve().parent
-ROOT = HERE.parent
+# What the build needs from the gimm tree around python/: in a clone, that tree; in an sdist
+# (which cannot hold files outside python/), the copy the sdist command puts in _gimm_source/.
+VENDORED = HERE / "_gimm_source"
+TREE_FILES = ("include", "cmake/version.hpp.in", "CMakeLists.txt", "LICENSE",
+              "weights/gimm-phantom-128.safetensors")
+ROOT = HERE.parent if (HERE.parent / "include" / "gimm").is_dir() else VENDORED
 WEIGHTS = ROOT / "weights" / "gimm-phantom-128.safetensors"
 VERSION = re.search(r"project\(gimm VERSION ([0-9.]+)",
                     (ROOT / "CMakeLists.txt").read_text()).group(1)
@@ -50,6 +56,23 @@ class build_py_with_weights(build_py):
         shutil.copy2(WEIGHTS, target / WEIGHTS.name)
 
 
+class sdist_with_tree(sdist):
+    """An sdist that builds anywhere: the headers, the version template, the version's
+    CMakeLists.txt, the LICENSE and the shipped weights copied into _gimm_source/ first."""
+
+    def run(self):
+        if ROOT != VENDORED:
+            shutil.rmtree(VENDORED, ignore_errors=True)
+            for name in TREE_FILES:
+                source, target = ROOT / name, VENDORED / name
+                target.parent.mkdir(parents=True, exist_ok=True)
+                if source.is_dir():
+                    shutil.copytree(source, target)
+                else:
+                    shutil.copy2(source, target)
+        super().run()
+
+
 ParallelCompile("GIMM_BUILD_JOBS", default=1).install()
 
 module = Pybind11Extension(
@@ -71,6 +94,7 @@ setup(
     packages=["gimm"],
     package_data={"gimm": ["_gimm.pyi", "py.typed"]},
     ext_modules=[module],
-    cmdclass={"build_ext": build_ext, "build_py": build_py_with_weights},
+    cmdclass={"build_ext": build_ext, "build_py": build_py_with_weights, "sdist": sdist_with_tree},
+    license_files=["LICENSE"],
     zip_safe=False,
 )

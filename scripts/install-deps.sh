@@ -12,7 +12,8 @@ set -euo pipefail
 core=(build-essential cmake pkg-config git libeigen3-dev libglm-dev libembree-dev
       nlohmann-json3-dev catch2 libbenchmark-dev libcli11-dev zlib1g-dev libpng-dev
       clang-format gnuplot-nox python3-numpy python3-nibabel libgdcm-dev libgdcm-tools
-      pybind11-dev python3-pybind11 python3-pil python3-matplotlib)
+      pybind11-dev python3-pybind11 python3-pil python3-matplotlib python3-pip python3-setuptools
+      python3-wheel)
 bench=(plastimatch libopencv-dev python3-opencv hyperfine)
 train=(python3-torch libopenblas0-pthread)
 fuzz=(clang libclang-rt-14-dev)
