@@ -36,8 +36,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
     GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
-    // PRED_DIR is replaced whole: it must not be, or hold, the dataset.
-    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, {{"--dataset", dataset}}, true);
+    // PRED_DIR must not be the dataset (the predictions would land among its files).
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, {{"--dataset", dataset}});
     std::unique_ptr<gimm::PairMatcher> matcher;
     if (method == "oracle")
       matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);

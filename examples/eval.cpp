@@ -354,7 +354,7 @@ int main(int argc, char** argv) {
   app.add_option("--centerlines", centerlines, "with --tree: the true centerlines JSON")
       ->check(CLI::ExistingFile);
   return gimm::cli::run(app, argc, argv, [&] {
-    // --out is replaced whole: it must not be, or hold, anything read.
+    // --out must not be one of the inputs (its files would land among theirs).
     std::vector<gimm::NamedPath> inputs{{"--dataset", dataset}, {"--predictions", predictions}};
     for (const auto& [flag, files] : {std::pair{"--compare", &runs},
                                       {"--truth", &truths},
@@ -362,7 +362,7 @@ int main(int argc, char** argv) {
                                       {"--tree", &trees},
                                       {"--centerlines", &centerlines}})
       for (const auto& f : *files) inputs.push_back({flag, f});
-    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, inputs, true);
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, inputs);
     const bool dataset_mode = !dataset.empty() || !predictions.empty();
     const int modes = int(!runs.empty()) + int(!truths.empty() || !matches.empty()) +
                       int(!trees.empty() || !centerlines.empty()) + int(dataset_mode);
