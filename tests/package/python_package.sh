@@ -7,7 +7,9 @@
 set -euo pipefail
 src=$(cd "$(dirname "$0")/../.." && pwd)
 work=${1:?usage: tests/package/python_package.sh WORK_DIR}
-rm -rf "$work" && mkdir -p "$work/sdist" "$work/clean" "$work/dist" "$work/site" "$work/elsewhere"
+rm -rf "$work" && mkdir -p "$work"
+work=$(cd "$work" && pwd) # every step below runs in another folder
+mkdir -p "$work/sdist" "$work/clean" "$work/dist" "$work/site" "$work/elsewhere"
 py=/usr/bin/python3
 (cd "$src/python" && $py setup.py -q sdist -d "$work/sdist" > "$work/sdist.log" 2>&1) ||
   { tail -20 "$work/sdist.log" >&2; echo "error: python_package: the sdist failed" >&2; exit 1; }
