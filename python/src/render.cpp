@@ -38,6 +38,8 @@ ContrastRecipe recipe_from(const py::handle& obj) {
       {"blood_pool_lo_hu", &ContrastRecipe::blood_pool_lo_hu},
       {"bone_hu", &ContrastRecipe::bone_hu},
       {"bone_shell_margin_hu", &ContrastRecipe::bone_shell_margin_hu},
+      {"bone_texture_hu", &ContrastRecipe::bone_texture_hu},
+      {"split_neck_mm", &ContrastRecipe::split_neck_mm},
       {"native_blood_hu", &ContrastRecipe::native_blood_hu},
       {"soft_weight", &ContrastRecipe::soft_weight},
       {"bone_weight", &ContrastRecipe::bone_weight},
