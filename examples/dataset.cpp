@@ -1,6 +1,6 @@
 // gimm-dataset: the DRR dataset (angiograms, masks, cameras, dense 3D-2D pair labels).
-//   gimm-dataset (--input DIR | --phantom COUNT) --out DIR [--seed S] [--phantom-size
-//   small|imagecas]
+//   gimm-dataset (--input DIR | --phantom COUNT) --out DIR [--seed S] [--style clinical|drr]
+//                [--phantom-size small|imagecas|chest] [--tree classic|rich] [--[no-]formation]
 //                [--view-mode shared|per_pair | --views FILE] [--shard I/N] [camera flags]
 //                [--recipe R]
 //                [--allow-single-system] [--warn-dropped FRACTION] [--export reference]
@@ -18,6 +18,7 @@
 #include "gimm/io/files.hpp"
 #include "gimm/io/volume_file.hpp"
 #include "gimm/pipeline/dataset_run.hpp"
+#include "gimm/pipeline/dataset_style.hpp"
 
 namespace {
 std::string detached_note_or_empty(const std::filesystem::path& file) {
@@ -33,9 +34,9 @@ int main(int argc, char** argv) {
   CLI::App app{"gimm-dataset: DRR dataset with dense 3D-2D correspondence labels", "gimm-dataset"};
   gimm::DatasetOptions options;
   gimm::cli::CArmFlags flags;
-  std::string input, out, shard_flag, views_file, view_mode = "shared", vessel_mode = "voxel",
-                                                  recipe = "angiography", projector = "siddon",
-                                                  phantom_size = "small";
+  std::string input, out, shard_flag, views_file,
+      view_mode = "shared", vessel_mode = "voxel", recipe = "angiography", projector = "siddon",
+      phantom_size = "small", tree = "classic", style_name = "clinical";
   int phantom_count = 0;
   bool quiet = false;
   std::string export_format;
@@ -44,10 +45,21 @@ int main(int argc, char** argv) {
                  "<id>.label<ext>, <ext> e.g. .nii.gz");
   app.add_option("--phantom", phantom_count, "generate COUNT phantom patients instead")
       ->check(gimm::cli::at_least(1));
-  app.add_option("--phantom-size", phantom_size,
-                 "small|imagecas|chest (the whole chest, for realistic views)")
-      ->check(CLI::IsMember({"small", "imagecas", "chest"}))
+  app.add_option("--style", style_name,
+                 "clinical (formed views, chest, tubes, rich tree, 0.3 mm pixels) | drr (the bare "
+                 "DRR of the crop phantom at 0.5 mm, the shipped weights' images): the defaults "
+                 "of --formation, --phantom-size, --tree, --vessels, --pixel (docs/dataset.md)")
+      ->check(CLI::IsMember({"clinical", "drr"}))
       ->capture_default_str();
+  app.add_option("--phantom-size", phantom_size,
+                 "small|imagecas|chest (the whole chest, for realistic views); default: the "
+                 "style's (clinical: chest, drr: small)")
+      ->check(CLI::IsMember({"small", "imagecas", "chest"}));
+  app.add_option("--tree", tree,
+                 "classic|rich: the phantoms' coronary tree; rich adds septals, a conus, RV "
+                 "and more branches (18-22) with Murray's-law calibres (docs/phantom.md); "
+                 "default: the style's (clinical: rich, drr: classic)")
+      ->check(CLI::IsMember({"classic", "rich"}));
   app.add_option("--out", out, "output directory");
   app.add_option("--seed", options.seed, "run seed (views, splits, sparse labels, phantoms)")
       ->capture_default_str();
@@ -71,17 +83,18 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--vessels", vessel_mode,
                  "voxel (label voxels) | mesh (Embree chords, anti-aliased) | tubes (phantoms: "
-                 "the analytic tubes' mesh, and their axes as the labelled centerlines)")
-      ->check(CLI::IsMember({"voxel", "mesh", "tubes"}))
-      ->capture_default_str();
+                 "the analytic tubes' mesh, and their axes as the labelled centerlines); "
+                 "default: tubes for phantoms of the clinical style, else voxel")
+      ->check(CLI::IsMember({"voxel", "mesh", "tubes"}));
   app.add_option("--shard", shard_flag, "I/N: this process does patients k with k mod N = I");
   app.add_flag("--line-integrals", options.write_line_integrals,
                "also write each view's float32 line integrals (<view>.npy, (rows, cols))");
-  app.add_flag("--formation", options.form_angiogram,
+  app.add_flag("--formation,!--no-formation", options.form_angiogram,
                "also form each view as a C-arm does (iodine lumen, scatter, blur, noise, "
                "shutters, log, window, edge enhancement; parameters drawn per view, "
                "docs/realism.md): <view>.formed.png (8-bit) and <view>.field.png; the lumen is "
-               "iodine in <view>.png too; masks and labels unchanged");
+               "iodine in <view>.png too; masks and labels unchanged. Default: the style's "
+               "(clinical: on, drr: off)");
   app.add_flag("--allow-single-system", options.allow_single_system,
                "a label of one tree: make that system only (assigned by the volume centre), "
                "record the other as absent");
@@ -107,6 +120,9 @@ int main(int argc, char** argv) {
       throw CLI::ValidationError("--vessels",
                                  "tubes are a phantom's analytic vessels; with "
                                  "--input the vessels are the label (voxel|mesh)");
+    if (tree != "classic" && !input.empty())
+      throw CLI::ValidationError("--tree",
+                                 "the tree is a phantom's; with --input it is the label's");
   });
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {
@@ -133,6 +149,16 @@ int main(int argc, char** argv) {
           "gimm-dataset: " << unused
                            << " sets nothing here (the view protocol picks the angles, "
                               "the centerlines the isocentre); use gimm-drr for one view");
+    // The style's defaults, where the flag itself was not given (phantom settings: phantoms).
+    const gimm::DatasetStyleChoices style =
+        gimm::style_choices(gimm::parse_dataset_style(style_name));
+    const bool phantoms = input.empty();
+    if (phantoms && app.count("--phantom-size") == 0)
+      phantom_size = gimm::to_string(style.phantom_size);
+    if (phantoms && app.count("--tree") == 0) tree = gimm::to_string(style.tree);
+    if (phantoms && app.count("--vessels") == 0 && style.phantom_tubes) vessel_mode = "tubes";
+    if (app.count("--formation") == 0) options.form_angiogram = style.formation;
+    if (app.count("--pixel") == 0) options.carm.pixel_mm = style.pixel_mm;
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
     if (!views_file.empty()) options.listed_views = gimm::read_view_list(views_file);
@@ -149,9 +175,11 @@ int main(int argc, char** argv) {
     run.input = input.empty()
                     ? nlohmann::json{{"phantom", phantom_count}, {"phantom_size", phantom_size}}
                     : nlohmann::json{{"folder", input}};
+    if (input.empty() && tree != "classic") run.input["phantom_tree"] = tree;
     const std::vector<gimm::PatientSource> sources =
         input.empty() ? gimm::phantom_sources(phantom_count, options.seed,
-                                              gimm::parse_phantom_size(phantom_size))
+                                              gimm::parse_phantom_size(phantom_size),
+                                              gimm::parse_tree_detail(tree))
                       : gimm::scan_imagecas_folder(input);
     // Voxels read from outside a header's folder are named (docs/conventions.md, "Detached
     // data files"); a header that cannot be read fails its patient later, by name.

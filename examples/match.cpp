@@ -203,11 +203,12 @@ int main(int argc, char** argv) {
   app.add_option("--split", split, "dataset mode: all|train|val|test")
       ->check(CLI::IsMember({"all", "train", "val", "test"}))
       ->capture_default_str();
-  std::string images = "rendered";
+  std::string images = "auto";
   app.add_option("--images", images,
                  "dataset mode: rendered (<view>.png) | formed (<view>.formed.png as a C-arm "
-                 "forms it, matched inside <view>.field.png; gimm-dataset --formation)")
-      ->check(CLI::IsMember({"rendered", "formed"}))
+                 "forms it, matched inside <view>.field.png; gimm-dataset --formation) | auto "
+                 "(formed where the dataset has them, as a clinical-style dataset does)")
+      ->check(CLI::IsMember({"auto", "rendered", "formed"}))
       ->capture_default_str();
   app.add_option("--geometry", geometry, "dataset mode: F from the view cameras or the matches")
       ->check(CLI::IsMember({"cameras", "matches"}))
@@ -450,7 +451,13 @@ int main(int argc, char** argv) {
                            << method << " does not look at them");
       const bool estimates_F =
           method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
-      return match_dataset(*matcher, dataset, split, geometry == "cameras", images == "formed",
+      const bool has_formed = gimm::DatasetReader(dataset).has_formed_views();
+      GIMM_USAGE_CHECK(images != "formed" || has_formed,
+                       "--images formed: " << dataset
+                                           << " has no formed views (made without a formation "
+                                              "stage: gimm-dataset --style drr or --no-formation)");
+      const bool formed = images == "formed" || (images == "auto" && has_formed);
+      return match_dataset(*matcher, dataset, split, geometry == "cameras", formed,
                            estimates_F ? options.gate.min_matches : 0, out, camera_error,
                            degradation, seed);
     }

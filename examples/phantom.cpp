@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
   CLI::App app{"gimm-phantom: a procedural CCTA patient (HU, coronary label, centerlines)",
                "gimm-phantom"};
   std::uint64_t seed = 0;
-  std::string out_dir, size = "small", dominance = "auto";
+  std::string out_dir, size = "small", dominance = "auto", tree = "classic";
   double noise = 15.0;
   bool preview = false;
   app.add_option("--seed", seed, "patient seed")->required();
@@ -86,6 +86,9 @@ int main(int argc, char** argv) {
   app.add_option("--dominance", dominance, "auto (seeded) | right | left | codominant")
       ->check(CLI::IsMember({"auto", "right", "left", "codominant"}))
       ->capture_default_str();
+  app.add_option("--tree", tree, "classic | rich (side branches, Murray's-law calibres)")
+      ->check(CLI::IsMember({"classic", "rich"}))
+      ->capture_default_str();
   app.add_option("--noise", noise, "scanner noise sigma, HU")
       ->check(gimm::cli::at_least(0))
       ->capture_default_str();
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
     options.size = gimm::parse_phantom_size(size);
     options.dominance = gimm::parse_dominance(dominance);
     options.noise_hu = noise;
+    options.tree = gimm::parse_tree_detail(tree);
     const gimm::Phantom p = gimm::make_phantom(options);
     const auto t1 = std::chrono::steady_clock::now();
     nlohmann::json centerlines = gimm::to_json(p.centerlines);
@@ -105,6 +109,7 @@ int main(int argc, char** argv) {
                               {"dominance", gimm::to_string(p.anatomy.dominance)},
                               {"lumen_hu", p.anatomy.lumen_hu},
                               {"noise_hu", noise},
+                              {"tree", tree},
                               {"heart_height_mm", p.anatomy.height_mm},
                               {"heart_radius_mm", p.anatomy.radius_mm}};
     if (options.size == gimm::PhantomSize::chest)

@@ -14,7 +14,7 @@ for tool in gimm-dataset gimm-match gimm-eval; do
   [ -x "$bin/$tool" ] || { echo "main-job: $bin/$tool is not built" >&2; exit 2; }
 done
 # 256 x 256 detector of 1 mm pixels: the images the shipped weights were trained on.
-"$bin/gimm-dataset" --phantom 4 --rows 256 --cols 256 --pixel 1.0 --out "$out/dataset"
+"$bin/gimm-dataset" --phantom 4 --style drr --rows 256 --cols 256 --pixel 1.0 --out "$out/dataset"
 "$bin/gimm-match" --dataset "$out/dataset" --out "$out/matches"
 "$bin/gimm-eval" --dataset "$out/dataset" --predictions "$out/matches" --out "$out/eval" \
   --name "GIMM (shipped weights, exact F)" > /dev/null

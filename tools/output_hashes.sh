@@ -12,7 +12,7 @@ work=$2
 rm -rf "$work" && mkdir -p "$work" && cd "$work"
 bin=$build/examples
 for mode in voxel mesh; do
-  "$bin/gimm-dataset" --phantom 2 --out "ds_$mode" --rows 128 --cols 128 --pixel 2.0 \
+  "$bin/gimm-dataset" --phantom 2 --style drr --out "ds_$mode" --rows 128 --cols 128 --pixel 2.0 \
     --vessels "$mode" --seed 5 --quiet > /dev/null
 done
 "$bin/gimm-phantom" --seed 9 --out ph > /dev/null

@@ -7,7 +7,7 @@ set -euo pipefail
 build=$1 work=${2:-$(mktemp -d)}
 for size in 256 512; do
   ds=$work/geometric-$size
-  [ -f "$ds/manifest.json" ] || "$build/examples/gimm-dataset" --phantom 1 --seed 7 --rows $size \
+  [ -f "$ds/manifest.json" ] || "$build/examples/gimm-dataset" --phantom 1 --style drr --seed 7 --rows $size \
     --cols $size --pixel "$(python3 -c "print(256.0 / $size)")" --out "$ds" --quiet
   # glibc's defaults (a program that calls the library), then gimm-match's policy
   # (examples/cli_common.hpp, keep_freed_memory: freed memory stays mapped for the next pair).

@@ -268,10 +268,11 @@ Raises gimm.IoError naming the file when it cannot be read, gimm.FormatError whe
   m.def(
       "make_phantom",
       [](std::uint64_t seed, const std::string& size, const std::string& dominance,
-         double noise_hu) {
+         double noise_hu, const std::string& tree) {
         PhantomOptions o;
         o.seed = seed;
         o.size = parse_phantom_size(size);
+        o.tree = parse_tree_detail(tree);
         o.dominance = parse_dominance(dominance);
         o.noise_hu = noise_hu;
         Phantom p;
@@ -298,11 +299,12 @@ Raises gimm.IoError naming the file when it cannot be read, gimm.FormatError whe
         return d;
       },
       py::arg("seed") = 0, py::arg("size") = "small", py::arg("dominance") = "auto",
-      py::arg("noise_hu") = 15.0, R"doc(
+      py::arg("noise_hu") = 15.0, py::arg("tree") = "classic", R"doc(
 A procedural CCTA patient (as gimm-phantom): size 'small' (128 x 128 x 64, 1.6 x 1.6 x 2 mm),
 'imagecas' (512 x 512 x 256, 0.4 x 0.4 x 0.5 mm) or 'chest' (the whole chest around the same
 heart, 224 x 165 x 190 at 1.6 x 1.6 x 2 mm; docs/phantom.md); dominance 'auto' | 'right' | 'left' |
-'codominant'; scanner noise sigma noise_hu (HU). Returns dict(hu int16 [i, j, k], label uint8
+'codominant'; scanner noise sigma noise_hu (HU); tree 'classic' (10-12 branches) or 'rich' (side
+branches and Murray's-law calibres, 18-23 branches; docs/phantom.md). Returns dict(hu int16 [i, j, k], label uint8
 (1 = coronary), geometry, centerlines dict(LCA=..., RCA=...) of the analytic trees (see
 extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's buffers (no copy).)doc");
   m.def(

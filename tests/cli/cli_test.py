@@ -194,7 +194,7 @@ check(not os.path.exists(os.path.join(TMP, "slab_none.png")), "a refused volume 
 disk = os.path.join(TMP, "full_disk")
 os.makedirs(disk)
 ds = os.path.join(disk, "ds")
-run("gimm-dataset", "--phantom", 1, "--seed", 3, "--rows", 96, "--cols", 96, "--pixel", 2.5,
+run("gimm-dataset", "--phantom", 1, "--style", "drr", "--seed", 3, "--rows", 96, "--cols", 96, "--pixel", 2.5,
     "--quiet", "--out", ds)
 pred, ev = os.path.join(disk, "pred"), os.path.join(disk, "eval")
 run("gimm-baseline", "--dataset", ds, "--method", "oracle", "--sigma", 0, "--out", pred)

@@ -23,8 +23,8 @@ from harness import Harness, read_png_gray
 
 BIN, TMP = sys.argv[1], sys.argv[2]
 DATASET = os.path.join(BIN, "gimm-dataset")
-COMMON = ["--phantom", "4", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
-          "--quiet"]
+COMMON = ["--phantom", "4", "--style", "drr", "--seed", "7", "--rows", "128", "--cols", "128",
+          "--pixel", "2.0", "--quiet"]
 h = Harness(BIN)
 check = h.check
 
@@ -122,7 +122,7 @@ for row, n in zip(lab["dense"][:50], valid[:50]):
 
 # Mesh vessels (Embree chords and visibility, traced on the writer thread too): labels hold, the
 # bytes do not depend on the thread count, and occluded points are marked.
-MESH = ["--phantom", "2", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
+MESH = ["--phantom", "2", "--style", "drr", "--seed", "7", "--rows", "128", "--cols", "128", "--pixel", "2.0",
         "--quiet", "--vessels", "mesh"]
 mesh_out = os.path.join(TMP, "mesh")
 run(MESH + ["--out", mesh_out])
@@ -152,8 +152,8 @@ same_tree(mesh_out, mesh_one, "mesh vessels on 1 thread against 2")
 # The released code's protocol: per-pair views (54 renders per patient) and orthographic
 # cameras; labels reproject and satisfy F (affine) there too.
 ortho = os.path.join(TMP, "per_pair_orthographic")
-run(["--phantom", "1", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel", "2.5", "--quiet",
-     "--view-mode", "per_pair", "--model", "orthographic", "--out", ortho])
+run(["--phantom", "1", "--style", "drr", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel",
+     "2.5", "--quiet", "--view-mode", "per_pair", "--model", "orthographic", "--out", ortho])
 opdir = os.path.join(ortho, "patients", "phantom-0000")
 check_pair_labels(opdir, "per-pair orthographic", views=54)
 cam = json.load(open(os.path.join(opdir, "views", "LCA_00.camera.json")))
@@ -169,7 +169,7 @@ VIEW_LIST = {"format": "gimm-views/1", "pairs": [
 views_json = os.path.join(TMP, "views.json")
 with open(views_json, "w") as f:
     json.dump(VIEW_LIST, f)
-LISTED = ["--phantom", "1", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel", "2.5",
+LISTED = ["--phantom", "1", "--style", "drr", "--seed", "7", "--rows", "96", "--cols", "96", "--pixel", "2.5",
           "--quiet", "--views", views_json]
 listed = os.path.join(TMP, "listed")
 run(LISTED + ["--out", listed])
@@ -594,6 +594,40 @@ h.run_on_full_disk("gimm-dataset", "merge", "--out", sharded, "--export", "refer
                    limit=pair_limit, watch=disk)
 run(["merge", "--out", sharded])
 same_tree(full, sharded, "shards merged after a failed merge")
+
+# Styles: the default (clinical) forms the views of the chest phantom's rich tree through its
+# tubes at 0.3 mm; drr is the bare DRR of the crop phantom; a flag of its own wins over either.
+styled = {}
+for name, extra in [("clinical", []), ("drr", ["--style", "drr"]),
+                    ("clinical_no_formation", ["--no-formation", "--pixel", "0.5"])]:
+    styled[name] = os.path.join(TMP, "style_" + name)
+    run(["--phantom", "1", "--seed", "7", "--rows", "64", "--cols", "64", "--quiet",
+         "--view-mode", "per_pair", "--out", styled[name]] + extra)
+for name, images, size, tree, pixel in [
+        ("clinical", ["drr", "formed", "field"], "chest", "rich", 0.3),
+        ("drr", ["drr"], "small", None, 0.5),
+        ("clinical_no_formation", ["drr"], "chest", "rich", 0.5)]:
+    with open(os.path.join(styled[name], "manifest.json")) as f:
+        m = json.load(f)
+    check(m["format"] == "gimm-dataset/2" and m["images"] == images,
+          f"style {name}: format {m['format']}, images {m.get('images')} (want {images})")
+    check(m["input"]["phantom_size"] == size and m["input"].get("phantom_tree") == tree,
+          f"style {name}: input {m['input']}")
+    check(("formation" in m["parameters"]) == ("formed" in images),
+          f"style {name}: a formation record exactly with formed images")
+    check(abs(m["parameters"]["carm"]["pixel_mm"] - pixel) < 1e-12,
+          f"style {name}: pixel {m['parameters']['carm']['pixel_mm']} (want {pixel})")
+    views = glob.glob(os.path.join(styled[name], "patients", "phantom-0000", "views", "*"))
+    formed = [v for v in views if v.endswith(".formed.png")]
+    check(bool(formed) == ("formed" in images), f"style {name}: {len(formed)} formed views")
+    vessels = m["parameters"]["vessel_mode"]
+    check(vessels == ("voxel" if name == "drr" else "tubes"), f"style {name}: vessels {vessels}")
+# The rich tree in the clinical style: its tubes' axes are the labelled centerlines, side
+# branches included (drr's are the label's skeleton, named by it).
+names = [b["name"] for b in json.load(open(os.path.join(
+    styled["clinical"], "patients", "phantom-0000", "centerlines.json")))["branches"]]
+check(len(names) >= 18 and {"S1", "S2", "S3", "CB", "RV1", "RV2"} <= set(names),
+      f"clinical style: the rich tree's branches, got {names}")
 
 ro = os.path.join(TMP, "read_only")
 os.makedirs(ro)

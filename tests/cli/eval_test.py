@@ -18,7 +18,7 @@ run, check = h.run, h.check
 
 shutil.rmtree(TMP, ignore_errors=True)
 ds = os.path.join(TMP, "ds")
-run("gimm-dataset", "--phantom", 2, "--out", ds, "--rows", 128, "--cols", 128, "--pixel", 2,
+run("gimm-dataset", "--phantom", 2, "--style", "drr", "--out", ds, "--rows", 128, "--cols", 128, "--pixel", 2,
     "--quiet")
 pooled = {}
 for name, extra in [("o0", ["--method", "oracle", "--sigma", 0]),

@@ -11,6 +11,7 @@ named in the hardening issue are also checked by name.
 
 Run by cli_test.py (check_flags); alone: flag_contract.py BIN_DIR
 """
+import json
 import os
 import re
 import subprocess
@@ -153,6 +154,10 @@ def check_flags(check, bin_dir, tmp_dir):
     later_dir = os.path.join(tmp_dir, "later")
     os.makedirs(later_dir)
     never = os.path.join(later_dir, "never")
+    drr_dataset = os.path.join(tmp_dir, "drr_dataset")  # a /1 dataset made without formation
+    os.makedirs(os.path.join(drr_dataset, "patients"))
+    with open(os.path.join(drr_dataset, "manifest.json"), "w") as f:
+        json.dump({"format": "gimm-dataset/1", "parameters": {}, "patients": []}, f)
     angles = ["--primary", 0, "--secondary", 0]
     later = [
         ("carm", angles + ["--rows", "-5"], ["--rows", "-5"]),
@@ -164,6 +169,10 @@ def check_flags(check, bin_dir, tmp_dir):
         ("dataset", ["--phantom", 1, "--primary", 3, "--out", never], ["--primary"]),
         ("dataset", ["--phantom", 1, "--input", nothing, "--out", never], ["--input", "--phantom"]),
         ("dataset", ["--phantom", 1, "--rows", 0, "--out", never], ["--rows", "got 0"]),
+        ("dataset", ["--input", later_dir, "--tree", "rich", "--out", never], ["--tree"]),
+        ("dataset", ["--phantom", 1, "--style", "xray", "--out", never], ["--style", "xray"]),
+        ("match", ["--dataset", drr_dataset, "--images", "formed", "--out", never],
+         ["--images", "no formed views"]),
         ("drr", ["--volume", this_file, "--label", this_file, "--out", never] + angles,
          ["--label", "--system"]),
         ("drr", ["--volume", this_file, "--out", os.path.join(never, "x")] + angles, ["--out"]),

@@ -32,7 +32,7 @@ def summary(method, *flags):
 
 
 ds = os.path.join(TMP, "ds")
-run("gimm-dataset", "--phantom", 3, "--seed", 5, "--rows", 256, "--cols", 256, "--pixel", 1.0,
+run("gimm-dataset", "--phantom", 3, "--style", "drr", "--seed", 5, "--rows", 256, "--cols", 256, "--pixel", 1.0,
     "--out", ds, "--quiet")
 geo, epi = summary("geometric"), summary("epipolar")
 print(f"geometric Prec@3px {geo['prec_3px']:.3f} 2D mean {geo['mean_px']:.2f} coverage "

@@ -96,7 +96,7 @@ if len(results) == 3:
 # find nothing on the small 156 x 132 pair above).
 SHIPPED = os.path.join(ROOT, "weights", "gimm-phantom-128.safetensors")
 DS = os.path.join(TMP, "ds_shipped")
-run("gimm-dataset", "--phantom", 1, "--rows", 256, "--cols", 256, "--pixel", 1.0, "--out", DS)
+run("gimm-dataset", "--phantom", 1, "--style", "drr", "--rows", 256, "--cols", 256, "--pixel", 1.0, "--out", DS)
 
 
 def shipped_matches(name, *flags, weights=SHIPPED):
@@ -207,7 +207,7 @@ if os.path.exists(sizes_out):
 
 # A whole dataset: every pair gets a predictions file and gimm-eval scores them.
 ds, pred = os.path.join(TMP, "ds"), os.path.join(TMP, "pred")
-run("gimm-dataset", "--phantom", 1, "--out", ds, "--rows", 96, "--cols", 96, "--pixel", 2.5, "--quiet")
+run("gimm-dataset", "--phantom", 1, "--style", "drr", "--out", ds, "--rows", 96, "--cols", 96, "--pixel", 2.5, "--quiet")
 p = run("gimm-match", "--dataset", ds, "--weights", WEIGHTS, "--out", pred)
 pairs = [f for root, _, files in os.walk(os.path.join(ds, "patients")) if os.path.basename(root) == "pairs" for f in files if f.endswith(".json")]
 written = [f for _, _, files in os.walk(pred) for f in files if f.endswith(".json")]

@@ -27,9 +27,9 @@ from safetensors_io import load_file  # noqa: E402
 shutil.rmtree(TMP, ignore_errors=True)
 os.makedirs(TMP)
 data = os.path.join(TMP, "data")
-subprocess.run([os.path.join(EXAMPLES, "gimm-dataset"), "--phantom", "3", "--rows", "64",
-                "--cols", "64", "--pixel", "4", "--out", data, "--quiet"], check=True,
-               stdout=subprocess.DEVNULL)
+subprocess.run([os.path.join(EXAMPLES, "gimm-dataset"), "--phantom", "3", "--style", "drr",
+                "--rows", "64", "--cols", "64", "--pixel", "4", "--out", data, "--quiet"],
+               check=True, stdout=subprocess.DEVNULL)
 COMMON = ["--dataset", data, "--size", "64", "--batch", "1", "--widths", "8", "16", "32",
           "--steps", "6", "--warmup", "2", "--val-pairs", "3", "--log-every", "1",
           "--threads", "1"]

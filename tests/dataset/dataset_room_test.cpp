@@ -99,11 +99,45 @@ TEST_CASE("Dataset reader: the manifest's format is checked", "[dataset]") {
   gimm::write_json_file(root / "manifest.json", {{"patients", json::array()}});
   CHECK_THROWS_WITH(gimm::DatasetReader(root), Catch::Contains("no 'format'"));
   gimm::write_json_file(root / "manifest.json",
-                        {{"format", "gimm-dataset/2"}, {"patients", json::array()}});
-  CHECK_THROWS_WITH(gimm::DatasetReader(root), Catch::Contains("\"gimm-dataset/2\" is not"));
-  gimm::write_json_file(root / "manifest.json",
-                        {{"format", gimm::kDatasetFormat}, {"patients", json::array()}});
+                        {{"format", "gimm-dataset/3"}, {"patients", json::array()}});
+  CHECK_THROWS_WITH(gimm::DatasetReader(root), Catch::Contains("\"gimm-dataset/3\" is not"));
+  gimm::write_json_file(
+      root / "manifest.json",
+      {{"format", "gimm-dataset/2"}, {"images", {"drr"}}, {"patients", json::array()}});
   CHECK(gimm::DatasetReader(root).pair_ids().empty());
+  CHECK(std::string(gimm::kDatasetFormat) == "gimm-dataset/2");
+}
+
+TEST_CASE("Dataset reader: the images of /2 by its list, of /1 by its parameters", "[dataset]") {
+  using Images = std::vector<std::string>;
+  const Images drr{"drr"}, formed{"drr", "formed", "field"};
+  // /1 (before the list): formed images exactly where the parameters record a formation stage.
+  CHECK(gimm::dataset_images_of({{"format", "gimm-dataset/1"}, {"parameters", {{"seed", 1}}}},
+                                "m") == drr);
+  CHECK(gimm::dataset_images_of(
+            {{"format", "gimm-dataset/1"}, {"parameters", {{"formation", {{"bits", 8}}}}}}, "m") ==
+        formed);
+  CHECK(gimm::dataset_images_of({{"format", "gimm-dataset/1"}}, "m") == drr);
+  // /2: the list, checked.
+  CHECK(gimm::dataset_images_of({{"format", "gimm-dataset/2"}, {"images", formed}}, "m") == formed);
+  CHECK_THROWS_WITH(gimm::dataset_images_of({{"format", "gimm-dataset/2"}}, "m.json"),
+                    Catch::Contains("m.json: no 'images' list"));
+  CHECK_THROWS_WITH(
+      gimm::dataset_images_of({{"format", "gimm-dataset/2"}, {"images", {"drr", "xray"}}}, "m"),
+      Catch::Contains("'images' holds \"xray\""));
+  // What the writer lists, and a reader of it.
+  CHECK(gimm::dataset_images(true) == json(formed));
+  CHECK(gimm::dataset_images(false) == json(drr));
+  const fs::path root = fresh("images");
+  fs::create_directories(root / "patients");
+  gimm::write_json_file(root / "manifest.json", {{"format", gimm::kDatasetFormat},
+                                                 {"images", gimm::dataset_images(true)},
+                                                 {"patients", json::array()}});
+  CHECK(gimm::DatasetReader(root).has_formed_views());
+  gimm::write_json_file(
+      root / "manifest.json",
+      {{"format", "gimm-dataset/1"}, {"parameters", {{"seed", 2}}}, {"patients", json::array()}});
+  CHECK_FALSE(gimm::DatasetReader(root).has_formed_views());
 }
 
 TEST_CASE("Dataset reader: a listed patient must be there, under patients/", "[dataset]") {

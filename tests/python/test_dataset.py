@@ -4,6 +4,7 @@ scores of evaluate() over the dataset equal to gimm-eval's."""
 import glob
 import json
 import os
+import shutil
 import unittest
 
 import numpy as np
@@ -12,15 +13,21 @@ import gimm
 from common import cli, run, tmp_path
 
 
+_MADE = []
+
+
 def dataset():
-    """A one-patient dataset made by gimm-dataset (64 x 80 px views), or None."""
+    """A one-patient dataset made by this build's gimm-dataset (64 x 80 px views), or None. Made
+    once per run, never taken from an earlier run (an older gimm-dataset's files)."""
     exe = cli("gimm-dataset")
     if exe is None:
         return None
     root = tmp_path("dataset", "ds", "x")[:-2]
-    if not os.path.exists(os.path.join(root, "manifest.json")):
-        run(exe, "--phantom", 1, "--rows", 64, "--cols", 80, "--pixel", 3.0, "--seed", 5,
-            "--out", root, "--quiet")
+    if not _MADE:
+        shutil.rmtree(root, ignore_errors=True)
+        run(exe, "--phantom", 1, "--style", "drr", "--rows", 64, "--cols", 80, "--pixel", 3.0,
+            "--seed", 5, "--out", root, "--quiet")
+        _MADE.append(root)
     return root
 
 
@@ -64,7 +71,7 @@ class DatasetTest(unittest.TestCase):
         np.testing.assert_array_equal(
             image, gimm.read_png(os.path.join(self.root, "patients", patient, "views",
                                               pair["view_a"] + ".png")))
-        self.assertEqual(self.ds.manifest["format"], "gimm-dataset/1")
+        self.assertEqual(self.ds.manifest["format"], "gimm-dataset/2")
 
     def test_baselines_equal_gimm_baseline_and_scores_equal_gimm_eval(self):
         baseline, evaluate = cli("gimm-baseline"), cli("gimm-eval")

@@ -3,6 +3,7 @@ an analytic chord-length computation, the GIL released, files and bad inputs."""
 import glob
 import json
 import os
+import shutil
 import threading
 import time
 import unittest
@@ -318,9 +319,9 @@ class RenderValues(unittest.TestCase):
         if exe is None:
             self.skipTest("gimm-dataset not built")
         root = tmp_path("mesh", "ds", "x")[:-2]
-        if not os.path.exists(os.path.join(root, "manifest.json")):
-            run(exe, "--phantom", 1, "--rows", 48, "--cols", 64, "--pixel", 4.0, "--seed", 3,
-                "--vessels", "mesh", "--out", root, "--quiet")
+        shutil.rmtree(root, ignore_errors=True)  # this build's files, never an earlier run's
+        run(exe, "--phantom", 1, "--style", "drr", "--rows", 48, "--cols", 64, "--pixel", 4.0,
+            "--seed", 3, "--vessels", "mesh", "--out", root, "--quiet")
         p = gimm.make_phantom(seed=3 * 1000003)  # the dataset's patient 0 (its seed rule)
         lca_mask = gimm.split_coronary_systems(p["label"], p["geometry"])["lca"]
         r = gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"], vessels="mesh")

@@ -5,6 +5,7 @@ import glob
 import itertools
 import json
 import os
+import shutil
 import sys
 import unittest
 
@@ -30,9 +31,9 @@ class RenderedPairsTest(unittest.TestCase):
         if exe is None:
             self.skipTest("gimm-dataset not built")
         root = tmp_path("rendered", "dataset", "x")[:-2]
-        if not os.path.exists(os.path.join(root, "manifest.json")):
-            run(exe, "--phantom", 1, "--rows", 64, "--cols", 80, "--pixel", 3.0, "--seed", 3,
-                "--out", root, "--quiet")
+        shutil.rmtree(root, ignore_errors=True)  # this build's files, never an earlier run's
+        run(exe, "--phantom", 1, "--style", "drr", "--rows", 64, "--cols", 80, "--pixel", 3.0,
+            "--seed", 3, "--out", root, "--quiet")
         # The patient's seed (pipeline/dataset.hpp phantom_sources: seed * 1000003 + index) and
         # the angles gimm-dataset drew for each view class.
         angles = {}

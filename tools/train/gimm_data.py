@@ -118,7 +118,33 @@ class PairSample:
 IMAGE_SUFFIXES = {"rendered": ".png", "formed": ".formed.png"}
 
 
+def dataset_images(root):
+    """The images every view of the dataset at `root` has ("drr", and "formed" and "field" where
+    a formation stage ran): a gimm-dataset/2 manifest lists them, a /1 manifest's parameters
+    hold a "formation" record (include/gimm/dataset/reader.hpp, dataset_images_of)."""
+    path = os.path.join(root, "manifest.json")
+    try:
+        with open(path) as f:
+            manifest = json.load(f)
+    except (OSError, ValueError) as e:
+        raise DatasetError(f"{path}: cannot read the manifest ({e})") from e
+    if manifest.get("format") == "gimm-dataset/1":
+        return ["drr", "formed", "field"] if "formation" in manifest.get("parameters", {}) else ["drr"]
+    if manifest.get("format") != "gimm-dataset/2" or not isinstance(manifest.get("images"), list):
+        raise DatasetError(f"{path}: format {manifest.get('format')!r} with images "
+                           f"{manifest.get('images')!r} is no gimm-dataset/1 or /2 manifest")
+    return manifest["images"]
+
+
+def resolve_images(root, images):
+    """'auto' -> 'formed' where the dataset has formed views, else 'rendered'."""
+    if images != "auto":
+        return images
+    return "formed" if "formed" in dataset_images(root) else "rendered"
+
+
 def load_pairs(root, split, size, limit=None, progress=True, images="rendered"):
+    images = resolve_images(root, images)
     if images not in IMAGE_SUFFIXES:
         raise DatasetError(f"images must be one of {sorted(IMAGE_SUFFIXES)}, got {images!r}")
     files = pair_files(root, read_split(root, split))

@@ -30,7 +30,7 @@ import torch.distributed as dist
 import torch.nn.functional as F
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from gimm_data import load_pairs  # noqa: E402
+from gimm_data import load_pairs, resolve_images  # noqa: E402
 from gimm_model import DEFAULT_CONFIG, GimmMatcher, config_metadata, fold_free_state_dict  # noqa: E402
 from safetensors_io import save_file  # noqa: E402
 from supervision import PairTruth, fine_losses, fine_targets, focal_loss  # noqa: E402
@@ -54,9 +54,10 @@ def parse_args(argv=None):
     p.add_argument("--clip", type=float, default=1.0, help="gradient norm clipping")
     p.add_argument("--batch", type=int, default=4, help="pairs per step per rank")
     p.add_argument("--size", type=int, default=128, help="network input: longer side, pixels")
-    p.add_argument("--images", default="rendered", choices=["rendered", "formed"],
+    p.add_argument("--images", default="auto", choices=["auto", "rendered", "formed"],
                    help="train on the renders (<view>.png) or the views as a C-arm forms them "
-                        "(<view>.formed.png, gimm-dataset --formation)")
+                        "(<view>.formed.png, gimm-dataset --formation); auto: formed where the "
+                        "dataset has them (a clinical-style dataset), else rendered")
     p.add_argument("--widths", type=int, nargs=3, default=[16, 32, 64])
     p.add_argument("--coarse-layers", nargs="+", default=["self", "cross"])
     p.add_argument("--fine-layers", nargs="+", default=["self", "cross"])
@@ -373,6 +374,8 @@ def main(argv=None):
                 "dataset", "run", "device"}
         saved = state["args"]
         args = argparse.Namespace(**{**saved, **{k: getattr(args, k) for k in keep}})
+    if args.images == "auto" and not args.rendered:  # saved as what it resolved to
+        args.images = resolve_images(args.dataset, args.images)
     if rank == 0:
         where = f"GPU {torch.cuda.get_device_name(device)}" if device.type == "cuda" else \
             f"CPU, BLAS {blas_in_use()}; {torch.get_num_threads()} threads"

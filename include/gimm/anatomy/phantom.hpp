@@ -35,6 +35,7 @@
 
 #include "gimm/anatomy/centerlines.hpp"
 #include "gimm/anatomy/chest.hpp"
+#include "gimm/anatomy/coronary_branches.hpp"
 #include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
@@ -107,8 +108,9 @@ struct PhantomOptions {
   std::uint64_t seed = 0;
   PhantomSize size = PhantomSize::small;
   Dominance dominance = Dominance::automatic;
-  double noise_hu = 15.0;              ///< scanner noise sigma; 0 for a noise-free volume
-  std::optional<VolumeGeometry> grid;  ///< overrides `size` (any spacing, crop or direction)
+  double noise_hu = 15.0;                 ///< scanner noise sigma; 0 for a noise-free volume
+  TreeDetail tree = TreeDetail::classic;  ///< rich: side branches and Murray's-law calibres
+  std::optional<VolumeGeometry> grid;     ///< overrides `size` (any spacing, crop or direction)
 };
 
 /// The seeded anatomy (what the seed decided), recorded with the outputs.
@@ -435,14 +437,17 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   };
   // A child starts on its parent at fraction f of the parent's length and runs on the surface
   // through the given (h, phi) control points.
-  auto child = [&](int parent, double f, SurfacePath path) {
+  auto child_drawn = [&](Rng& draws, int parent, double f, SurfacePath path) {
     const auto& pp = tree.branches[parent].points;
     const Vector3d start =
         pp[std::min(pp.size() - 1, static_cast<std::size_t>(f * (pp.size() - 1)))];
     path.control.insert(path.control.begin(), {frame.height(start), frame.azimuth(start) / kDeg});
-    auto pts = trace_surface_path(frame, path, off, step, rng);
+    auto pts = trace_surface_path(frame, path, off, step, draws);
     pts.front() = start;
     return pts;
+  };
+  auto child = [&](int parent, double f, SurfacePath path) {
+    return child_drawn(rng, parent, f, std::move(path));
   };
   auto jitter = [&](double spread) { return rng.uniform(-spread, spread); };
   const auto LCA = CoronarySystem::LCA, RCA = CoronarySystem::RCA;
@@ -522,6 +527,14 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   if (right_dom)
     add_branch("PLB", RCA, rca, child(rca, 1.0, {{{4, -175}, {0.3 * H, 165 + jitter(5)}}}), 1.1,
                0.7);
+  if (options.tree == TreeDetail::rich) {  // a stream of its own: the branches above stay
+    Rng branch_rng = Rng(options.seed).fork(0xb7a9c4);
+    auto trace = [&](int parent, double f, std::vector<std::array<double, 2>> control) {
+      return child_drawn(branch_rng, parent, f, SurfacePath{std::move(control)});
+    };
+    auto inward = [&](const Vector3d& p) { return (p - frame.onto_surface(p, 10.0)).normalized(); };
+    add_side_branches(tree, trace, inward, A.long_axis, H, left_dom, right_dom, step, branch_rng);
+  }
   tree.validate("make_phantom");
 
   // --- Sample the grid.

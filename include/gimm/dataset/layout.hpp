@@ -8,7 +8,8 @@
 ///   patients/<id>/views/<view>.mask.png              8-bit projected vessel mask (0/255)
 ///   patients/<id>/views/<view>.overlap.png           vessel passages per pixel (mesh mode)
 ///   patients/<id>/views/<view>.npy                   float32 line integrals (--line-integrals)
-///   patients/<id>/views/<view>.formed.png            8/16-bit formed angiogram (--formation)
+///   patients/<id>/views/<view>.formed.png            8/16-bit formed angiogram (--formation;
+///                                                    the manifest's "images" lists "formed")
 ///   patients/<id>/views/<view>.field.png             8-bit exposed field (0/255; --formation)
 ///   patients/<id>/views/<view>.camera.json           camera, view class, angles, PNG window
 ///   patients/<id>/views/<view>.points.json           projected centerline points
@@ -29,8 +30,12 @@
 
 namespace gimm {
 
-/// The manifest's "format": written by the dataset writer, checked by the reader.
-inline constexpr const char* kDatasetFormat = "gimm-dataset/1";
+/// The manifest's "format": written by the dataset writer; the reader takes it and /1.
+/// /2 lists the images every view has ("images": "drr", and "formed" and "field" with a
+/// formation stage); a /1 manifest has no list, and its views have what its parameters say
+/// (dataset_images).
+inline constexpr const char* kDatasetFormat = "gimm-dataset/2";
+inline constexpr const char* kDatasetFormatV1 = "gimm-dataset/1";
 
 /// One process's share of the patients: patient k (in id order) belongs to shard k mod count.
 struct Shard {

@@ -2,7 +2,7 @@
 /// The one reader of a gimm dataset (layout.hpp): patients and pairs by split, pair labels,
 /// masks, cameras. Every caller (evaluation, baselines, matching, the reference export) reads
 /// through it, so there is one rule for each field: dense label columns are found by name in
-/// the pair's `dense_fields`, and the manifest's format must be kDatasetFormat.
+/// the pair's `dense_fields`, and the manifest's format must be kDatasetFormat (or /1).
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -148,14 +148,45 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
   return t;
 }
 
-/// Checks a manifest's format field; `where` names the file.
+/// Checks a manifest's format field (kDatasetFormat or kDatasetFormatV1); `where` names the file.
 inline void check_dataset_format(const nlohmann::json& manifest, const std::string& where) {
   GIMM_CHECK_AS(
       FormatError, manifest.is_object() && manifest.contains("format"),
       where << ": no 'format' (a gimm dataset manifest says \"" << kDatasetFormat << "\")");
   const nlohmann::json& f = manifest.at("format");
-  GIMM_CHECK_AS(FormatError, f.is_string() && f.get<std::string>() == kDatasetFormat,
-                where << ": format " << f.dump() << " is not " << kDatasetFormat);
+  GIMM_CHECK_AS(FormatError,
+                f.is_string() && (f.get<std::string>() == kDatasetFormat ||
+                                  f.get<std::string>() == kDatasetFormatV1),
+                where << ": format " << f.dump() << " is not " << kDatasetFormat << " (or "
+                      << kDatasetFormatV1 << ")");
+}
+
+/// The images a dataset's views have: "drr" (<view>.png), and "formed" (<view>.formed.png)
+/// and "field" (<view>.field.png) where a formation stage ran. /2 lists them; /1 says so in its
+/// parameters (a "formation" record).
+inline std::vector<std::string> dataset_images_of(const nlohmann::json& manifest,
+                                                  const std::string& where) {
+  const auto formed = std::vector<std::string>{"drr", "formed", "field"};
+  if (manifest.value("format", "") == kDatasetFormatV1) {
+    const auto& params =
+        manifest.contains("parameters") ? manifest["parameters"] : nlohmann::json{};
+    return params.is_object() && params.contains("formation") ? formed
+                                                              : std::vector<std::string>{"drr"};
+  }
+  GIMM_CHECK_AS(FormatError, manifest.contains("images") && manifest["images"].is_array(),
+                where << ": no 'images' list (a " << kDatasetFormat << " manifest has one)");
+  std::vector<std::string> images;
+  for (const auto& i : manifest["images"]) {
+    GIMM_CHECK_AS(FormatError, i.is_string() && (i == "drr" || i == "formed" || i == "field"),
+                  where << ": 'images' holds " << i.dump() << " (drr|formed|field)");
+    images.push_back(i.get<std::string>());
+  }
+  return images;
+}
+
+/// What the writer lists under "images" for a run with or without a formation stage.
+inline nlohmann::json dataset_images(bool formation) {
+  return formation ? nlohmann::json{"drr", "formed", "field"} : nlohmann::json{"drr"};
 }
 
 /// Reads pairs, masks and cameras of a gimm-dataset directory; masks are cached per patient
@@ -176,6 +207,15 @@ class DatasetReader {
   const DatasetLayout& layout() const { return layout_; }
   /// manifest.json (null when the dataset has none yet, e.g. shards not merged).
   const nlohmann::json& manifest() const { return manifest_; }
+  /// The images every view has (dataset_images_of); {"drr"} without a manifest.
+  std::vector<std::string> images() const {
+    return manifest_.is_null() ? std::vector<std::string>{"drr"}
+                               : dataset_images_of(manifest_, layout_.manifest().string());
+  }
+  bool has_formed_views() const {
+    const auto i = images();
+    return std::find(i.begin(), i.end(), "formed") != i.end();
+  }
 
   /// The patients whose status is "ok" in manifest.json (all patient folders with done.json
   /// if there is no manifest), restricted to splits/<split>.txt unless split is "all"; sorted.

@@ -185,7 +185,8 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
     const auto m = read_json_file(path);
     check_dataset_format(m, path.string());
     if (merged.is_null()) merged = m;
-    GIMM_CHECK(m.at("parameters") == merged.at("parameters") && m.at("input") == merged.at("input"),
+    GIMM_CHECK(m.at("parameters") == merged.at("parameters") &&
+                   m.at("input") == merged.at("input") && m.at("format") == merged.at("format"),
                "merge: '" << path.string() << "' was made with other parameters than '"
                           << shards[0].string() << "'");
     const int this_count = m.at("shard").at("count").get<int>();

@@ -142,6 +142,7 @@ struct PatientSource {
   std::filesystem::path image, label;  ///< files (empty for a phantom)
   std::optional<std::uint64_t> phantom_seed;
   PhantomSize phantom_size = PhantomSize::small;
+  TreeDetail phantom_tree = TreeDetail::classic;
   std::string split = "train";  ///< train | val | test (assign_splits)
 };
 
@@ -157,7 +158,8 @@ inline std::string imagecas_image_id(const std::filesystem::path& file) {
 
 /// `count` phantom patients "phantom-0000", ... of run seed `seed` (patient n: phantom seed
 /// seed * 1000003 + n).
-inline std::vector<PatientSource> phantom_sources(int count, std::uint64_t seed, PhantomSize size) {
+inline std::vector<PatientSource> phantom_sources(int count, std::uint64_t seed, PhantomSize size,
+                                                  TreeDetail tree = TreeDetail::classic) {
   GIMM_CHECK(count > 0, "--phantom must be a positive count, got " << count);
   std::vector<PatientSource> sources;
   for (int n = 0; n < count; ++n) {
@@ -167,6 +169,7 @@ inline std::vector<PatientSource> phantom_sources(int count, std::uint64_t seed,
     s.id = id;
     s.phantom_seed = seed * 1000003ull + static_cast<std::uint64_t>(n);
     s.phantom_size = size;
+    s.phantom_tree = tree;
     sources.push_back(s);
   }
   return sources;
@@ -248,9 +251,12 @@ inline void assign_splits(std::vector<PatientSource>& patients, const DatasetOpt
 /// done.json, so that resuming into a folder made with other parameters is refused.
 inline nlohmann::json patient_run(const PatientSource& src, const DatasetOptions& o) {
   nlohmann::json input;
-  if (src.phantom_seed)
+  if (src.phantom_seed) {
     input = {{"phantom_seed", *src.phantom_seed}, {"phantom_size", to_string(src.phantom_size)}};
-  else
+    // Only when rich: a classic run's record (and its resumption) is as it always was.
+    if (src.phantom_tree != TreeDetail::classic)
+      input["phantom_tree"] = to_string(src.phantom_tree);
+  } else
     input = {{"image", src.image.filename().string()}, {"label", src.label.filename().string()}};
   return {{"parameters", o.to_json()}, {"input", input}, {"split", src.split}};
 }
@@ -379,6 +385,7 @@ inline PatientVolumes read_patient(const PatientSource& src) {
     PhantomOptions po;
     po.seed = *src.phantom_seed;
     po.size = src.phantom_size;
+    po.tree = src.phantom_tree;
     Phantom p = make_phantom(po);
     return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines),
             std::move(p.anatomy)};

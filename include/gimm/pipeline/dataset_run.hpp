@@ -196,6 +196,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   }
   progress.finish();
   nlohmann::json manifest = {{"format", kDatasetFormat},
+                             {"images", dataset_images(options.form_angiogram)},
                              {"parameters", options.to_json()},
                              {"input", run.input},
                              {"patients", patients}};
