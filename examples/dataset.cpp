@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"small", "imagecas", "chest"}));
   app.add_option("--tree", tree,
                  "classic|rich: the phantoms' coronary tree; rich adds septals, a conus, RV "
-                 "and more branches (18-22) with Murray's-law calibres (docs/phantom.md); "
+                 "and more branches (20-29) with Murray's-law calibres (docs/phantom.md); "
                  "default: the style's (clinical: rich, drr: classic)")
       ->check(CLI::IsMember({"classic", "rich"}));
   app.add_option("--out", out, "output directory");
@@ -95,6 +95,10 @@ int main(int argc, char** argv) {
                "docs/realism.md): <view>.formed.png (8-bit) and <view>.field.png; the lumen is "
                "iodine in <view>.png too; masks and labels unchanged. Default: the style's "
                "(clinical: on, drr: off)");
+  app.add_flag("--smooth-background,!--no-smooth-background", options.smooth_voxel_steps,
+               "mesh/tubes vessels: blur each view's background by half a voxel's footprint "
+               "before the vessels are added (the volume's voxel steps at fine pixels are not "
+               "anatomy; vessels and labels unchanged). Default: the style's (clinical: on)");
   app.add_flag("--allow-single-system", options.allow_single_system,
                "a label of one tree: make that system only (assigned by the volume centre), "
                "record the other as absent");
@@ -159,6 +163,8 @@ int main(int argc, char** argv) {
     if (phantoms && app.count("--vessels") == 0 && style.phantom_tubes) vessel_mode = "tubes";
     if (app.count("--formation") == 0) options.form_angiogram = style.formation;
     if (app.count("--pixel") == 0) options.carm.pixel_mm = style.pixel_mm;
+    if (app.count("--smooth-background") == 0)
+      options.smooth_voxel_steps = style.smooth_voxel_steps;
     flags.finish(options.carm);
     options.view_mode = gimm::parse_view_mode(view_mode);
     if (!views_file.empty()) options.listed_views = gimm::read_view_list(views_file);

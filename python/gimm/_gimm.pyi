@@ -226,7 +226,8 @@ class Renderer:
                  = "angiography",
                  pad_mm: float = 80.0, projector: Literal["siddon", "trilinear"] = "siddon",
                  step_mm: float = 0.0, vessel_depth: bool = False, min_chord_mm: float = 1e-6,
-                 vessels: Literal["voxel", "mesh"] = "voxel", name: str = "volume") -> None: ...
+                 vessels: Literal["voxel", "mesh"] = "voxel", smooth_voxel_steps: bool = False,
+                 name: str = "volume") -> None: ...
     def render(self, camera: _CameraLike, intensity: bool = True) -> Dict[str, np.ndarray]:
         """line_integrals, intensity (float32), vessel_mask, overlap (uint8), depth_mm
         (float32): (rows, cols) views of gimm's buffers, no copy."""

@@ -164,7 +164,8 @@ The prepared view renderer: prepare a patient once, render any number of C-arm v
 
 Renderer(volume, mask=None, *, geometry=None, spacing=None, origin=None, direction=None,
          recipe='angiography', pad_mm=80.0, projector='siddon', step_mm=0.0,
-         vessel_depth=False, min_chord_mm=1e-6, vessels='voxel', name='volume')
+         vessel_depth=False, min_chord_mm=1e-6, vessels='voxel', smooth_voxel_steps=False,
+         name='volume')
 
 volume: CT in HU [i, j, k] (nx, ny, nz), any real dtype (float32, int16, ...), any order, or a
 gimm.Volume (which carries its geometry); with recipe='none' it is attenuation in mm^-1 instead.
@@ -177,7 +178,9 @@ pad_mm: tissue beyond the axial coverage (copies of the edge slices), 0 = air. p
 'siddon' (exact) or 'trilinear' (step_mm, 0 = the smallest spacing). vessels: 'voxel' (the
 mask's voxels carry the contrast) or 'mesh' (the lumen as a surface mesh of the mask, traced by
 Embree: anti-aliased edges and an overlap count; gimm-dataset --vessels mesh). vessel_depth:
-also the vessel depth and overlap count per pixel.
+also the vessel depth and overlap count per pixel. smooth_voxel_steps (mesh): blur the
+background by half a voxel's footprint before the vessels are added (gimm-dataset
+--smooth-background).
 
 Copies: a float32 or int16 volume and a uint8 or bool mask in Fortran order (writeable) are
 read in place, no copy (see gimm.Volume); other dtypes and layouts are converted into a copy first. The
@@ -190,7 +193,7 @@ several Python threads at once.)doc")
                        const py::object& direction, const py::handle& recipe, double pad_mm,
                        const std::string& projector, double step_mm, bool vessel_depth,
                        double min_chord_mm, const std::string& vessels_mode,
-                       const std::string& name) {
+                       bool smooth_voxel_steps, const std::string& name) {
              RendererOptions o;
              o.recipe = recipe_from(recipe);
              o.pad_mm = pad_mm;
@@ -204,6 +207,7 @@ several Python threads at once.)doc")
              if (o.vessels == VesselMode::mesh && mask.is_none())
                throw py::value_error("vessels='mesh' needs the vessel mask (mask=...)");
              o.min_chord_mm = min_chord_mm;
+             o.smooth_voxel_steps = smooth_voxel_steps;
              HuInput ct = hu_arg(volume, {geometry, spacing, origin, direction}, name);
              const VolumeGeometry& grid = std::visit(
                  [](const auto& in) -> const VolumeGeometry& { return in.volume.geometry(); }, ct);
@@ -223,7 +227,8 @@ several Python threads at once.)doc")
            py::arg("recipe") = "angiography", py::arg("pad_mm") = kDefaultPadMm,
            py::arg("projector") = "siddon", py::arg("step_mm") = 0.0,
            py::arg("vessel_depth") = false, py::arg("min_chord_mm") = 1e-6,
-           py::arg("vessels") = "voxel", py::arg("name") = "volume")
+           py::arg("vessels") = "voxel", py::arg("smooth_voxel_steps") = false,
+           py::arg("name") = "volume")
       .def(
           "render",
           [](const ViewRenderer& r, const py::handle& camera, bool intensity) {

@@ -304,7 +304,7 @@ A procedural CCTA patient (as gimm-phantom): size 'small' (128 x 128 x 64, 1.6 x
 'imagecas' (512 x 512 x 256, 0.4 x 0.4 x 0.5 mm) or 'chest' (the whole chest around the same
 heart, 224 x 165 x 190 at 1.6 x 1.6 x 2 mm; docs/phantom.md); dominance 'auto' | 'right' | 'left' |
 'codominant'; scanner noise sigma noise_hu (HU); tree 'classic' (10-12 branches) or 'rich' (side
-branches and Murray's-law calibres, 18-23 branches; docs/phantom.md). Returns dict(hu int16 [i, j, k], label uint8
+branches and Murray's-law calibres, 20-29 branches; docs/phantom.md). Returns dict(hu int16 [i, j, k], label uint8
 (1 = coronary), geometry, centerlines dict(LCA=..., RCA=...) of the analytic trees (see
 extract_centerlines for the fields), anatomy dict). Arrays are views of gimm's buffers (no copy).)doc");
   m.def(

@@ -343,6 +343,12 @@ class RenderValues(unittest.TestCase):
                                        atol=(window["max"] - window["min"]) / 65535.0)
         voxel = gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"]).render(camera)
         self.assertFalse(np.array_equal(voxel["intensity"], out["intensity"]))
+        # smooth_voxel_steps (gimm-dataset --smooth-background): the background changes, the
+        # vessel mask does not.
+        smooth = gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"], vessels="mesh",
+                               smooth_voxel_steps=True).render(camera)
+        np.testing.assert_array_equal(smooth["vessel_mask"], out["vessel_mask"])
+        self.assertGreater(np.abs(smooth["line_integrals"] - out["line_integrals"]).max(), 1e-3)
         with self.assertRaisesRegex(ValueError, "vessels must be 'voxel' or 'mesh', got 'x'"):
             gimm.Renderer(p["hu"], lca_mask, geometry=p["geometry"], vessels="x")
         with self.assertRaisesRegex(ValueError, "needs the vessel mask"):

@@ -375,6 +375,52 @@ TEST_CASE("View renderer: mesh mode against voxel mode, and the lumen gain",
   CHECK(mesh.unoccluded(ap, {0, 0, 12}));
 }
 
+TEST_CASE("View renderer: smoothed voxel steps blur the background only",
+          "[render][view_renderer][embree]") {
+  // smooth_voxel_steps: the background's line integrals are blurred by half a voxel's footprint
+  // (here 1 mm voxels at 0.25 mm pixels: about 5 px, sigma 2.7 px); the vessels are added
+  // after, exactly as without it, and their mask, overlap and depth are the surface's.
+  const Scene& s = scene();
+  const std::shared_ptr<const VesselSurface> surface = vessel_surface_from_mask(s.tubes);
+  RendererOptions sharp;
+  sharp.vessels = VesselMode::mesh;
+  RendererOptions smooth = sharp;
+  smooth.smooth_voxel_steps = true;
+  const ViewRenderer a(s.hu, &s.tubes, sharp, "volume", nullptr, surface);
+  const ViewRenderer b(s.hu, &s.tubes, smooth, "volume", nullptr, surface);
+  RendererOptions plain_options;
+  const ViewRenderer plain(s.hu, nullptr, plain_options);
+  for (const Camerad& camera :
+       {small_carm(0, 0, 0.25).camera(), small_carm(30, 20, 0.25).camera()}) {
+    // Footprint: one voxel at the volume's centre, across the view (magnification 1000/750).
+    const double footprint = b.voxel_footprint_px(camera);
+    CHECK(footprint == Approx(1.0 * 1000.0 / 750.0 / 0.25).epsilon(1e-6));
+    const RenderedView va = a.render(camera), vb = b.render(camera), vp = plain.render(camera);
+    const Image<float> blurred = gaussian_blur(vp.line_integrals, 0.5 * footprint);
+    double largest_step_sharp = 0, largest_step_smooth = 0;
+    for (int r = 0; r < camera.rows(); ++r)
+      for (int c = 0; c < camera.cols(); ++c) {
+        INFO("pixel (" << r << ", " << c << ")");
+        REQUIRE(vb.vessel_mask(r, c) == va.vessel_mask(r, c));
+        REQUIRE(vb.overlap(r, c) == va.overlap(r, c));
+        // What the vessels add is the same; the background is the blurred one.
+        const double added_sharp = va.line_integrals(r, c) - vp.line_integrals(r, c);
+        const double added_smooth = vb.line_integrals(r, c) - blurred(r, c);
+        REQUIRE(added_smooth == Approx(added_sharp).margin(2e-5));
+        if (c > 0 && !va.vessel_mask(r, c) && !va.vessel_mask(r, c - 1)) {
+          largest_step_sharp =
+              std::max(largest_step_sharp,
+                       std::abs(double(va.line_integrals(r, c)) - va.line_integrals(r, c - 1)));
+          largest_step_smooth =
+              std::max(largest_step_smooth,
+                       std::abs(double(vb.line_integrals(r, c)) - vb.line_integrals(r, c - 1)));
+        }
+      }
+    // The steps between neighbouring background pixels shrink (the bone column's edges).
+    CHECK(largest_step_smooth < 0.5 * largest_step_sharp);
+  }
+}
+
 TEST_CASE("View renderer: bad inputs are refused with the problem named",
           "[render][view_renderer]") {
   const Scene& s = scene();

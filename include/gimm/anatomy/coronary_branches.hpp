@@ -10,14 +10,16 @@
 ///   LCx   a third obtuse marginal (OM3, 50%, not with left dominance);
 ///   RCA   the conus branch (CB), the sinus node artery (SN, 60%), two right-ventricular
 ///         branches (RV1, RV2), a second acute marginal (AM2, 50%, not with left dominance);
-///   PLB   a second posterolateral branch (PLB2, 60%, right dominance).
-/// 18-23 branches in all. Calibres: the roots' proximal radii from Dodge et al. (Circulation
-/// 1992;86:232-246: left main 4.5 +- 0.5 mm, proximal LAD 3.7 +- 0.4 mm, proximal RCA 3.9 +- 0.6
-/// mm with right and 2.8 +- 0.5 mm with left dominance, proximal LCx 3.4 +- 0.5 and 4.2 +- 0.6
-/// mm), a side branch's from its class, and along every branch Murray's law (Murray 1926: r^3 of
-/// a parent = the sum of its children's r^3) at each side branch's origin, with a 0.8% per cm
-/// taper between them and a 0.5 mm floor. The distal LAD then comes out at 2.0 mm in diameter
-/// on average over 16 seeds (1.1-2.7 mm), Dodge's 1.9 +- 0.4 mm. docs/phantom.md.
+///   PLB   a second posterolateral branch (PLB2, 60%, right dominance);
+///   and a twig (D1t, OM2t, ...) off the middle of each of D1, D2, OM1, OM2, AM, RV1 and the
+///   PDA (70% each).
+/// 20-29 branches in all (25 on average). Calibres: the roots' proximal radii from Dodge et al.
+/// (Circulation 1992;86:232-246: left main 4.5 +- 0.5 mm, proximal LAD 3.7 +- 0.4 mm, proximal
+/// RCA 3.9 +- 0.6 mm with right and 2.8 +- 0.5 mm with left dominance, proximal LCx 3.4 +- 0.5
+/// and 4.2 +- 0.6 mm), a side branch's from its class, and along every branch Murray's law (Murray
+/// 1926: r^3 of a parent = the sum of its children's r^3) at each side branch's origin, with a 1.3%
+/// per cm taper between them and a 0.5 mm floor. The distal LAD then comes out at 2.0 mm in
+/// diameter on average over 64 seeds (sd 0.5 mm), Dodge's 1.9 +- 0.4 mm. docs/phantom.md.
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
@@ -100,7 +102,7 @@ inline double proximal_radius(const std::string& name, CoronarySystem system, bo
 }
 
 /// Radii along every branch: the proximal radius, less by Murray's law at each side branch's
-/// origin, a 0.8% per cm taper, and the floor kMinBranchRadiusMm. `proximal[b]` for branch b; a
+/// origin, a 1.3% per cm taper, and the floor kMinBranchRadiusMm. `proximal[b]` for branch b; a
 /// side branch is kept to 0.8 of its parent's radius where it leaves. Parents come before their
 /// children in the tree (as make_phantom builds it).
 inline void murray_radii(CenterlineTree& tree, std::vector<double> proximal) {
@@ -129,7 +131,7 @@ inline void murray_radii(CenterlineTree& tree, std::vector<double> proximal) {
     std::size_t next = 0;
     for (std::size_t n = 0; n < br.points.size(); ++n) {
       if (n > 0)
-        cube *= std::pow(std::max(0.0, 1.0 - 0.0008 * (br.points[n] - br.points[n - 1]).norm()), 3);
+        cube *= std::pow(std::max(0.0, 1.0 - 0.0013 * (br.points[n] - br.points[n - 1]).norm()), 3);
       for (; next < leaving[b].size() && leaving[b][next].first <= n; ++next) {
         double& side = proximal[leaving[b][next].second];
         side = std::max(kMinBranchRadiusMm, std::min(side, 0.8 * std::cbrt(cube)));
@@ -144,9 +146,10 @@ inline void murray_radii(CenterlineTree& tree, std::vector<double> proximal) {
 /// Adds the rich tree's side branches to `tree` (a classic phantom tree) and sets every
 /// branch's radii by murray_radii. `trace(parent, f, control)` is a surface path from the
 /// parent's point at fraction f through (h mm, phi degrees) control points; `inward(p)` the unit
-/// vector into the heart at p; `apex` the unit long axis; `H` the heart's height (mm).
-template <class Trace, class Inward>
-void add_side_branches(CenterlineTree& tree, Trace trace, Inward inward,
+/// vector into the heart at p; `locate(p)` p's (h mm, phi degrees) on the heart; `apex` the unit
+/// long axis; `H` the heart's height (mm).
+template <class Trace, class Inward, class Locate>
+void add_side_branches(CenterlineTree& tree, Trace trace, Inward inward, Locate locate,
                        const Eigen::Vector3d& apex, double H, bool left_dominant,
                        bool right_dominant, double step, Rng& rng) {
   using Control = std::vector<std::array<double, 2>>;
@@ -189,16 +192,18 @@ void add_side_branches(CenterlineTree& tree, Trace trace, Inward inward,
   if (chance(0.3))
     add("RI", LCA, lm,
         trace(lm, 1.0, Control{{0.35 * H, 62 + jitter(6)}, {0.7 * H, 78 + jitter(8)}}));
-  if (!left_dominant && chance(0.5))
+  if (!left_dominant && chance(0.5))  // short of the RCA's posterolateral branches (165 deg on)
     add("OM3", LCA, lcx,
         trace(lcx, 0.88 + jitter(0.04),
-              Control{{0.45 * H, 160 + jitter(8)}, {0.65 * H, 165 + jitter(8)}}));
+              Control{{0.45 * H, 150 + jitter(4)}, {0.62 * H, 152 + jitter(4)}}));
 
+  // The first two leave where the RCA has reached its groove (before, it crosses from the
+  // aortic root); the conus stays right of the LAD's groove.
   add("CB", RCA, rca,
-      trace(rca, 0.04 + jitter(0.01), Control{{8, -5 + jitter(6)}, {18, 15 + jitter(8)}}));
+      trace(rca, 0.15 + jitter(0.02), Control{{5, -30 + jitter(5)}, {12, -16 + jitter(4)}}));
   if (chance(0.6))
     add("SN", RCA, rca,
-        trace(rca, 0.08 + jitter(0.02), Control{{-18, -70 + jitter(8)}, {-32, -80 + jitter(10)}}));
+        trace(rca, 0.18 + jitter(0.02), Control{{-18, -70 + jitter(8)}, {-32, -80 + jitter(10)}}));
   add("RV1", RCA, rca,
       trace(rca, 0.28 + jitter(0.04),
             Control{{0.35 * H, -45 + jitter(6)}, {0.55 * H, -38 + jitter(6)}}));
@@ -211,7 +216,27 @@ void add_side_branches(CenterlineTree& tree, Trace trace, Inward inward,
               Control{{0.45 * H, -115 + jitter(6)}, {0.65 * H, -112 + jitter(6)}}));
   const int plb = detail::branch_index(tree, "PLB", RCA);
   if (right_dominant && plb >= 0 && chance(0.6))
-    add("PLB2", RCA, plb, trace(plb, 0.5, Control{{0.35 * H, 150 + jitter(6)}}));
+    add("PLB2", RCA, plb, trace(plb, 0.5, Control{{0.35 * H, 182 + jitter(4)}}));
+
+  // Twigs: a small branch off the middle of each diagonal, marginal, RV branch and PDA (70%
+  // each), turning 10-18 degrees off its parent's course to either side, ending before it.
+  for (const char* name : {"D1", "D2", "OM1", "OM2", "AM", "RV1", "PDA"})
+    for (const CoronarySystem system : {LCA, RCA}) {
+      const int parent = detail::branch_index(tree, name, system);
+      if (parent < 0 || !chance(0.7)) continue;
+      const double f = rng.uniform(0.35, 0.65);
+      const auto& pp = tree.branches[static_cast<std::size_t>(parent)].points;
+      const auto at = locate(pp[static_cast<std::size_t>(f * static_cast<double>(pp.size() - 1))]);
+      const auto end = locate(pp.back());
+      double dphi = end[1] - at[1];
+      while (dphi > 180) dphi -= 360;
+      while (dphi < -180) dphi += 360;
+      const double side = chance(0.5) ? 1.0 : -1.0, turn = side * rng.uniform(10, 18);
+      add(std::string(name) + "t", system, parent,
+          trace(parent, f,
+                Control{{at[0] + 0.35 * (end[0] - at[0]) + 3, at[1] + 0.35 * dphi + 0.6 * turn},
+                        {at[0] + 0.7 * (end[0] - at[0]) + 5, at[1] + 0.7 * dphi + turn}}));
+    }
 
   std::vector<double> proximal;
   for (const auto& b : tree.branches)

@@ -533,7 +533,11 @@ inline Phantom make_phantom(const PhantomOptions& options) {
       return child_drawn(branch_rng, parent, f, SurfacePath{std::move(control)});
     };
     auto inward = [&](const Vector3d& p) { return (p - frame.onto_surface(p, 10.0)).normalized(); };
-    add_side_branches(tree, trace, inward, A.long_axis, H, left_dom, right_dom, step, branch_rng);
+    auto locate = [&](const Vector3d& p) {
+      return std::array<double, 2>{frame.height(p), frame.azimuth(p) / kDeg};
+    };
+    add_side_branches(tree, trace, inward, locate, A.long_axis, H, left_dom, right_dom, step,
+                      branch_rng);
   }
   tree.validate("make_phantom");
 

@@ -48,9 +48,9 @@ inline Shard resolve_shard(const std::string& flag) {
   Shard s;
   if (!flag.empty()) {
     const auto slash = flag.find('/');
-    GIMM_CHECK(slash != std::string::npos, "--shard must be I/N, got '" << flag << "'");
-    s.index = parse_shard_int(flag.substr(0, slash), "--shard index");
-    s.count = parse_shard_int(flag.substr(slash + 1), "--shard count");
+    GIMM_CHECK(slash != std::string::npos, "a shard must be I/N, got '" << flag << "'");
+    s.index = parse_shard_int(flag.substr(0, slash), "shard index");
+    s.count = parse_shard_int(flag.substr(slash + 1), "shard count");
   } else if (!env_or_empty("SLURM_ARRAY_TASK_ID").empty()) {
     s.index = parse_shard_int(env_or_empty("SLURM_ARRAY_TASK_ID"), "SLURM_ARRAY_TASK_ID");
     GIMM_CHECK(!env_or_empty("SLURM_ARRAY_TASK_COUNT").empty(),

@@ -69,6 +69,9 @@ struct DatasetOptions {
   /// (anatomy/tube_mesh.hpp) instead of its label's voxel surface, and the labelled
   /// centerlines are the same tubes' axes instead of the label's skeleton (`--vessels tubes`).
   bool phantom_tubes = false;
+  /// Mesh modes: blur each view's background by half a voxel's footprint before the vessels
+  /// are added (RendererOptions::smooth_voxel_steps; `--smooth-background`).
+  bool smooth_voxel_steps = false;
   std::size_t sparse_count = 20;
   bool write_line_integrals = false;  ///< also each view's float32 line integrals (<view>.npy)
   /// Also each view as a C-arm forms it (render/angiogram_formation.hpp), a named stage after
@@ -119,7 +122,9 @@ struct DatasetOptions {
                         {"allow_single_system", allow_single_system},
                         {"gimm_version", GIMM_VERSION_STRING}};
     if (!listed_views.empty()) j["views"] = view_list_to_json(listed_views);
-    // Only when on: runs without it keep their records (and resume) byte for byte.
+    // Only when on (this and the formation): runs without it keep their records (and resume)
+    // byte for byte.
+    if (smooth_voxel_steps) j["smooth_voxel_steps"] = true;
     if (form_angiogram)
       j["formation"] = {
           {"stage", "angiogram"},
@@ -160,7 +165,7 @@ inline std::string imagecas_image_id(const std::filesystem::path& file) {
 /// seed * 1000003 + n).
 inline std::vector<PatientSource> phantom_sources(int count, std::uint64_t seed, PhantomSize size,
                                                   TreeDetail tree = TreeDetail::classic) {
-  GIMM_CHECK(count > 0, "--phantom must be a positive count, got " << count);
+  GIMM_CHECK(count > 0, "phantom_sources: the patient count must be positive, got " << count);
   std::vector<PatientSource> sources;
   for (int n = 0; n < count; ++n) {
     PatientSource s;
@@ -441,6 +446,7 @@ inline ViewRenderer system_renderer(const Volume<float>& hu, const Volume<std::u
   ro.pad_mm = o.pad_mm;
   ro.projector = o.projector;
   ro.vessels = o.vessel_mode;
+  ro.smooth_voxel_steps = o.smooth_voxel_steps;
   if (o.vessel_mode == VesselMode::mesh && !tubes) tubes = vessel_surface_from_mask(mask);
   return ViewRenderer(hu, &mask, ro, "patient " + patient, dense, std::move(tubes));
 }

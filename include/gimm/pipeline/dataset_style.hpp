@@ -4,8 +4,8 @@
 ///   clinical (the default): views as a cath lab shows them - formed (iodine, scatter, blur,
 ///     quantum noise, the system's processing, shutters, the guiding catheter), the whole chest
 ///     around the heart, the phantoms' analytic tubes with the rich tree (side branches,
-///     Murray's-law calibres), 0.3 mm detector pixels (512 px: a 154 mm field, as the clinical
-///     frames).
+///     Murray's-law calibres), the background's voxel steps smoothed, 0.3 mm detector pixels
+///     (512 px: a 154 mm field, as the clinical frames).
 ///   drr: the bare DRR of the crop phantom's classic tree with voxel vessels at 0.5 mm pixels:
 ///     the images the shipped weights were trained on, and every dataset before the styles.
 #include <string>
@@ -32,13 +32,14 @@ struct DatasetStyleChoices {
   bool formation = false;  ///< DatasetOptions::form_angiogram
   PhantomSize phantom_size = PhantomSize::small;
   TreeDetail tree = TreeDetail::classic;
-  bool phantom_tubes = false;  ///< DatasetOptions::phantom_tubes (vessels "tubes")
-  double pixel_mm = 0.5;       ///< CArmConfig::pixel_mm
+  bool phantom_tubes = false;       ///< DatasetOptions::phantom_tubes (vessels "tubes")
+  double pixel_mm = 0.5;            ///< CArmConfig::pixel_mm
+  bool smooth_voxel_steps = false;  ///< DatasetOptions::smooth_voxel_steps (mesh vessels)
 };
 
 inline DatasetStyleChoices style_choices(DatasetStyle s) {
   if (s == DatasetStyle::drr) return {};
-  return {true, PhantomSize::chest, TreeDetail::rich, true, 0.3};
+  return {true, PhantomSize::chest, TreeDetail::rich, true, 0.3, true};
 }
 
 }  // namespace gimm

@@ -25,6 +25,7 @@
 
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/core/error.hpp"
+#include "gimm/core/filter.hpp"
 #include "gimm/core/image.hpp"
 #include "gimm/core/parallel.hpp"
 #include "gimm/core/volume.hpp"
@@ -64,6 +65,12 @@ struct RendererOptions {
   /// Voxel mode: also the vessel depth and overlap count per pixel (one more walk through the
   /// vessel box per pixel). Mesh mode always has them.
   bool vessel_depth = false;
+  /// Mesh mode: blur the background's line integrals by half a voxel's footprint on the
+  /// detector (at the volume's centre) before the vessels are added. A volume's voxels imaged
+  /// at pixels several times finer show as steps - a chest phantom's 1.6 mm voxel covers 7 px
+  /// of 0.3 mm at a magnification of 1.33 - which are the grid, not anatomy (clinical frames
+  /// show soft rib and spine edges). The vessels, their mask and the labels are untouched.
+  bool smooth_voxel_steps = false;
 };
 
 struct RenderedView {
@@ -134,6 +141,8 @@ class ViewRenderer {
     drr.empty_blocks = &mu_blocks_;
     RenderedView out;
     out.line_integrals = render_line_integrals(attenuation_.mu, attenuation_.pads, camera, drr);
+    if (surface_ && options_.smooth_voxel_steps)
+      out.line_integrals = gaussian_blur(out.line_integrals, 0.5 * voxel_footprint_px(camera));
     if (surface_) {
       VesselProjection vp = surface_->project(camera);
       out.vessel_mask = Image<std::uint8_t>(camera.rows(), camera.cols(), 0);
@@ -165,6 +174,16 @@ class ViewRenderer {
   }
 
   bool has_vessels() const { return surface_ != nullptr || vessel_box_.size() > 0; }
+  /// The length on `camera`'s detector (px) of one voxel (the mean spacing) at the volume's
+  /// centre, across the view.
+  double voxel_footprint_px(const Camerad& camera) const {
+    const Volume<float>& mu = attenuation_.mu;
+    const Eigen::Vector3d centre = mu.index_to_world(
+        Eigen::Vector3d((mu.nx() - 1) / 2.0, (mu.ny() - 1) / 2.0, (mu.nz() - 1) / 2.0));
+    const Eigen::Vector3d across = camera.R().row(0).transpose();  // the detector's u axis
+    const double voxel = mu.spacing().mean();
+    return (camera.project(centre + voxel * across).uv - camera.project(centre).uv).norm();
+  }
   const RendererOptions& options() const { return options_; }
   /// The attenuation the views integrate (mm^-1): the scan, and its pads (siddon).
   const PaddedAttenuation& attenuation() const { return attenuation_; }
