@@ -84,9 +84,8 @@ inline std::vector<Eigen::Vector3d> septal_path(const Eigen::Vector3d& start,
 
 }  // namespace detail
 
-/// The proximal radius (mm) of each branch of a rich tree, by name and system, drawn from `rng`.
-inline double proximal_radius(const std::string& name, CoronarySystem system, bool left_dominant,
-                              Rng& rng) {
+/// The proximal radius (mm) of each branch of a rich tree, by name, drawn from `rng`.
+inline double proximal_radius(const std::string& name, bool left_dominant, Rng& rng) {
   const auto jitter = [&](double spread) { return rng.uniform(-spread, spread); };
   if (name == "LM") return 2.25 + jitter(0.25);
   if (name == "LAD") return 1.85 + jitter(0.2);
@@ -97,7 +96,6 @@ inline double proximal_radius(const std::string& name, CoronarySystem system, bo
     return 0.95 + jitter(0.1);
   if (name == "S1" || name == "D3" || name == "OM3" || name == "RV1" || name == "RV2")
     return 0.8 + jitter(0.08);
-  (void)system;
   return 0.68 + jitter(0.08);  // S2.., conus, sinus node, AM2, PLB2
 }
 
@@ -240,7 +238,7 @@ void add_side_branches(CenterlineTree& tree, Trace trace, Inward inward, Locate 
 
   std::vector<double> proximal;
   for (const auto& b : tree.branches)
-    proximal.push_back(proximal_radius(b.name, b.system, left_dominant, rng));
+    proximal.push_back(proximal_radius(b.name, left_dominant, rng));
   murray_radii(tree, proximal);
 }
 
