@@ -151,5 +151,24 @@ best = gate_sweep.choose(settings, 0.55)
 check(best is settings[2], f"gate_sweep.choose: {best}")
 check(gate_sweep.choose(settings, 0.8) is None, "gate_sweep.choose: chose below the coverage")
 
+# --- matches_off_vessels.py: 3 matches on a mask bar, 1 beside it (within the growth), 2 off. ---
+off_ds = os.path.join(TMP, "off_ds")
+os.makedirs(os.path.join(off_ds, "patients", "p0", "views"))
+bar = np.zeros((40, 60), np.uint8)
+bar[:, 20:23] = 255
+Image.fromarray(bar).save(os.path.join(off_ds, "patients", "p0", "views", "LCA_00.mask.png"))
+os.makedirs(os.path.join(TMP, "off_pred", "p0"))
+json.dump({"points_a": [[21, 5], [20.4, 10], [22, 30], [24, 12], [40, 5], [5, 39]],
+           "points_b": [[0, 0]] * 6, "confidence": [0.1, 0.2, 0.3, 0.4, 0.9, 0.7]},
+          open(os.path.join(TMP, "off_pred", "p0", "LCA_00-01.json"), "w"))
+off = subprocess.run([sys.executable, os.path.join(TOOLS, "matches_off_vessels.py"), off_ds,
+                      os.path.join(TMP, "off_pred")], capture_output=True, text=True)
+check(off.returncode == 0 and "6 matches: 0.333 off" in off.stdout
+      and "off the tree: quartiles 0.750 0.800 0.850" in off.stdout,
+      f"matches_off_vessels: {off.stdout} {off.stderr}")
+off = subprocess.run([sys.executable, os.path.join(TOOLS, "matches_off_vessels.py"), off_ds,
+                      os.path.join(TMP, "off_pred"), "--radius", "0"], capture_output=True, text=True)
+check("6 matches: 0.500 off" in off.stdout, f"matches_off_vessels --radius 0: {off.stdout}")
+
 print("\n".join("FAIL: " + f for f in failures) or "atlas_tools_test: all checks passed")
 sys.exit(1 if failures else 0)
