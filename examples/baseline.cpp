@@ -36,6 +36,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
     GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
+    // A flag of the other method would be ignored: refuse it, as gimm-match does.
+    GIMM_USAGE_CHECK(app.count("--sigma") == 0 || method == "oracle",
+                     "--sigma is for --method oracle, not " << method);
+    GIMM_USAGE_CHECK(app.count("--max-points") == 0 || method == "epipolar",
+                     "--max-points is for --method epipolar, not " << method);
     // PRED_DIR must not be the dataset (the predictions would land among its files).
     gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, {{"--dataset", dataset}});
     std::unique_ptr<gimm::PairMatcher> matcher;

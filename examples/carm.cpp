@@ -60,16 +60,27 @@ int main(int argc, char** argv) {
     }
     GIMM_USAGE_CHECK(reference.empty() && !explain, "--reference and --explain go with --dicom");
     if (!pair.empty()) {
+      for (const char* flag :
+           {"--primary", "--secondary", "--sid", "--sod", "--rows", "--cols", "--pixel", "--model",
+            "--routine", "--isocenter", "--principal-point", "--table"})
+        GIMM_USAGE_CHECK(app.count(flag) == 0, "--pair reads both cameras from their files; "
+                                                   << flag << " cannot be given");
       const auto a = gimm::camera_from_json(gimm::read_json_file(pair[0]), pair[0]);
       const auto b = gimm::camera_from_json(gimm::read_json_file(pair[1]), pair[1]);
       nlohmann::json out;
-      out["F"] = gimm::matrix_to_json(gimm::fundamental_from_cameras(a, b));
+      try {
+        out["F"] = gimm::matrix_to_json(gimm::fundamental_from_cameras(a, b));
+      } catch (const gimm::Error& e) {  // name the two files
+        throw gimm::Error(std::string(e.what()) + " (--pair " + pair[0] + " " + pair[1] + ")");
+      }
       out["convention"] = "x_b^T F x_a = 0, pixels, A = " + pair[0] + ", B = " + pair[1];
       std::cout << out.dump(2) << "\n";
       return 0;
     }
     GIMM_USAGE_CHECK(routine || (app.count("--primary") && app.count("--secondary")),
                      "gimm-carm: give --primary and --secondary, or --routine, or --pair");
+    GIMM_USAGE_CHECK(!routine || (app.count("--primary") == 0 && app.count("--secondary") == 0),
+                     "--routine sets every view's angles; --primary/--secondary cannot be given");
     flags.finish(carm);
     if (!routine) {
       std::cout << gimm::to_json(carm).dump(2) << "\n";

@@ -4,6 +4,7 @@
 //                    [--tolerance MM] [--min-spur MM]
 #include <chrono>
 #include <cstdio>
+#include <optional>
 
 #include "cli_common.hpp"
 #include "gimm/anatomy/centerlines_json.hpp"
@@ -33,8 +34,14 @@ int main(int argc, char** argv) {
       ->check(gimm::cli::at_least(0))
       ->capture_default_str();
   return gimm::cli::run(app, argc, argv, [&] {
-    gimm::cli::refuse_outputs_over_inputs({{"--out", out_path}},
-                                          {{"--label", label_path}, {"--truth", truth_path}});
+    GIMM_USAGE_CHECK(app.count("--tolerance") == 0 || !truth_path.empty(),
+                     "--tolerance is for the comparison with --truth; give --truth too");
+    auto inputs = gimm::cli::volume_input("--label", label_path);
+    inputs.push_back({"--truth", truth_path});
+    gimm::cli::refuse_outputs_over_inputs({{"--out", out_path}}, inputs);
+    // The truth is read first: a bad --truth fails the run before --out is written.
+    std::optional<gimm::CenterlineTree> truth;
+    if (!truth_path.empty()) truth = gimm::read_centerlines(truth_path);
     const auto t0 = std::chrono::steady_clock::now();
     if (const std::string note = gimm::detached_data_note(label_path); !note.empty())
       std::cerr << "gimm-centerlines: note: " << note << "\n";
@@ -62,9 +69,8 @@ int main(int argc, char** argv) {
         "centerlines %.0f ms -> %s\n",
         tree.branches.size(), tree.length(int(gimm::CoronarySystem::LCA)),
         tree.length(int(gimm::CoronarySystem::RCA)), ms(t0, t1), ms(t1, t2), out_path.c_str());
-    if (!truth_path.empty()) {
-      const auto truth = gimm::read_centerlines(truth_path);
-      const auto c = gimm::compare_centerlines(tree, truth, tolerance);
+    if (truth) {
+      const auto c = gimm::compare_centerlines(tree, *truth, tolerance);
       std::printf(
           "against %s (tolerance %.2f mm): mean distance %.3f mm (extracted->truth), "
           "%.3f mm (truth->extracted); spurious %.1f of %.1f mm (%.1f%%); missed %.1f of "

@@ -7,6 +7,8 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <new>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/io/files.hpp"
+#include "gimm/io/volume_file.hpp"
 #include "gimm/nn/shipped_weights.hpp"
 #include "gimm/version.hpp"
 
@@ -53,6 +56,20 @@ inline void refuse_outputs_over_inputs(const std::vector<NamedPath>& outputs,
   flag_value("", [&] { check_outputs_not_inputs(outputs, inputs, folders_contain); });
 }
 
+/// A volume input as the files it reads: the header and, for a detached NRRD/MetaImage
+/// header, its data file, so that no output may replace either. A header that cannot be read is
+/// left for the reader to report.
+inline std::vector<NamedPath> volume_input(const std::string& flag, const std::string& path) {
+  std::vector<NamedPath> files{{flag, path}};
+  if (path.empty() || !std::filesystem::is_regular_file(path)) return files;
+  try {
+    const std::filesystem::path data = volume_data_file(path);
+    if (data != std::filesystem::path(path)) files.push_back({flag + "'s data file", data});
+  } catch (const Error&) {
+  }
+  return files;
+}
+
 /// Where the shipped weights are looked for, after $GIMM_WEIGHTS: the install tree
 /// (<prefix>/share/gimm/weights beside <prefix>/bin), the source tree this binary was built from.
 inline std::vector<std::filesystem::path> default_weights_dirs() {
@@ -75,15 +92,24 @@ inline std::string default_weights() {
   return nn::find_shipped_weights(default_weights_dirs());
 }
 
+/// The value of `input` when it is a finite number, else nullopt (the range validators leave
+/// those to CLI11's type check and to Finite).
+inline std::optional<long double> finite_number(const std::string& input) {
+  char* end = nullptr;
+  const long double value = std::strtold(input.c_str(), &end);
+  if (end == input.c_str() || *end != '\0') return std::nullopt;
+  if (!std::isfinite(static_cast<double>(value))) return std::nullopt;
+  return value;
+}
+
 /// Refuses a number below `min`, saying so in those words (CLI11's PositiveNumber prints the
 /// double range, 4.9e-324 as 309 digits).
 inline CLI::Validator at_least(double min) {
   return CLI::Validator(
       [min](std::string& input) -> std::string {
-        char* end = nullptr;
-        const long double value = std::strtold(input.c_str(), &end);
-        if (end == input.c_str() || *end != '\0') return {};        // not a number: CLI11 says so
-        if (!std::isfinite(static_cast<double>(value))) return {};  // Finite says so
+        const auto parsed = finite_number(input);
+        if (!parsed) return {};  // CLI11 or Finite says what is wrong
+        const long double value = *parsed;
         if (!(value >= min)) {
           std::ostringstream os;
           os << "must be >= " << min << ", got " << input;
@@ -94,17 +120,50 @@ inline CLI::Validator at_least(double min) {
       "", "AtLeast");
 }
 
+/// Refuses a number outside [min, max] (or [min, max) when !max_included), in those words.
+inline CLI::Validator in_range(double min, double max, bool max_included) {
+  return CLI::Validator(
+      [=](std::string& input) -> std::string {
+        const auto parsed = finite_number(input);
+        if (!parsed) return {};  // CLI11 or Finite says what is wrong
+        const long double value = *parsed;
+        if (value >= min && (max_included ? value <= max : value < max)) return {};
+        std::ostringstream os;
+        os << "must be in [" << min << ", " << max << (max_included ? "]" : ")") << ", got "
+           << input;
+        return os.str();
+      },
+      "", "InRange");
+}
+
+/// Refuses an integer that is neither 0 (off, as is) nor in [min, max].
+inline CLI::Validator zero_or_in(long long min, long long max) {
+  return CLI::Validator(
+      [=](std::string& input) -> std::string {
+        char* end = nullptr;
+        const long long value = std::strtoll(input.c_str(), &end, 10);
+        if (end == input.c_str() || *end != '\0') return {};  // not an integer: CLI11 says so
+        if (value == 0 || (value >= min && value <= max)) return {};
+        return "must be 0 or in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
+               input;
+      },
+      "", "ZeroOrInRange");
+}
+
 /// Refuses a number that is not above zero ("must be > 0, got -5").
 inline const CLI::Validator Positive(
     [](std::string& input) -> std::string {
-      char* end = nullptr;
-      const long double value = std::strtold(input.c_str(), &end);
-      if (end == input.c_str() || *end != '\0') return {};
-      if (!std::isfinite(static_cast<double>(value))) return {};  // Finite says so
-      if (!(value > 0)) return "must be > 0, got " + input;
+      const auto value = finite_number(input);
+      if (!value) return {};  // CLI11 or Finite says what is wrong
+      if (!(*value > 0)) return "must be > 0, got " + input;
       return {};
     },
     "", "Positive");
+
+/// A C-arm position (isocentre, table), mm, and a detector pitch, mm, within CArm's bounds.
+inline const CLI::Validator position_mm =
+    in_range(-CArm::kMaxPositionMm, CArm::kMaxPositionMm, true);
+inline const CLI::Validator pitch_mm = in_range(CArm::kMinPixelMm, CArm::kMaxDistanceMm, true);
 
 /// The C-arm flags shared by gimm-carm and gimm-drr; fills `carm`.
 struct CArmFlags {
@@ -154,8 +213,10 @@ struct CArmFlags {
     if (!principal_point.empty())
       carm.principal_point = Eigen::Vector2d(principal_point[0], principal_point[1]);
     if (!table.empty()) carm.table_mm = {table[0], table[1], table[2]};
-    flag_value("the camera flags (--primary --secondary --sid --sod --rows --cols --pixel)",
-               [&] { carm.validate(); });
+    flag_value(
+        "the camera flags (--primary --secondary --sid --sod --rows --cols --pixel "
+        "--isocenter --principal-point --table)",
+        [&] { carm.validate(); });
   }
 };
 
@@ -195,6 +256,30 @@ inline CLI::Validator integer_in_range(bool is_unsigned) {
       "", is_unsigned ? "NonNegativeInteger" : "Integer");
 }
 
+/// Refuses an empty value for a number: CLI11 reads "" as 0, past the flag's own range check.
+inline const CLI::Validator NotEmpty(
+    [](std::string& input) -> std::string {
+      if (input.find_first_not_of(" \t") == std::string::npos)
+        return "must be a number, got an empty value";
+      return {};
+    },
+    "", "NotEmpty");
+
+/// Refuses an empty path: an output named "" was written as hidden files or not at all.
+inline const CLI::Validator NotEmptyPath(
+    [](std::string& input) -> std::string {
+      if (input.empty()) return "must be a path, got an empty value";
+      return {};
+    },
+    "", "NotEmptyPath");
+
+/// The output flags of gimm's CLIs (files, prefixes or folders).
+inline bool is_output_flag(const std::string& name) {
+  for (const char* flag : {"--out", "--picture", "--tree", "--tree-vtk", "--timings"})
+    if (name == flag) return true;
+  return false;
+}
+
 /// CLI11's type name of `option` ("FLOAT", "UINT", "INT", ...), without its validators'.
 inline std::string base_type_name(const CLI::Option& option) {
   const std::string full = option.get_type_name();
@@ -208,6 +293,8 @@ inline std::string base_type_name(const CLI::Option& option) {
 inline void check_numbers(CLI::App& app) {
   for (CLI::Option* option : app.get_options()) {
     const std::string type = base_type_name(*option);
+    if (type == "FLOAT" || type == "UINT" || type == "INT") option->check(NotEmpty);
+    if (is_output_flag(option->get_name())) option->check(NotEmptyPath);
     if (type == "FLOAT")
       option->check(Finite);
     else if (type == "UINT" || type == "INT")
@@ -265,7 +352,7 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
     }
     for (char& c : what)
       if (c == '\n' || c == '\r') c = ' ';
-    std::cerr << "error: " << what << " (see " << name << " --help)\n";
+    std::cerr << "error: " << printable(what) << " (see " << name << " --help)\n";
     return 2;
   }
   try {
@@ -273,8 +360,15 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
   } catch (const UsageError& e) {
     std::cerr << "error: " << e.what() << " (see " << name << " --help)\n";
     return 2;
+  } catch (const std::bad_alloc&) {
+    // Readers name their file (read_volume); elsewhere the command line is what can be named.
+    std::cerr << "error: out of memory: " << name << " could not allocate what its inputs ask "
+              << "for (a process memory limit, or an input larger than it says?); arguments:";
+    for (int i = 1; i < argc; ++i) std::cerr << " " << printable(argv[i]);
+    std::cerr << "\n";
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << "error: " << printable(e.what()) << "\n";
     return 1;
   }
 }

@@ -119,6 +119,7 @@ int main(int argc, char** argv) {
   merge_cmd->add_option("--out", out, "the dataset directory the shards wrote to")->required();
   merge_cmd->add_option("--export", export_format, "also write OUT/reference (reference layout)")
       ->check(CLI::IsMember({"reference"}));
+  const auto phantom_size_given = [&] { return app.count("--phantom-size") > 0; };
   app.callback([&] {  // during parsing: a usage error (exit 2)
     if (vessel_mode == "tubes" && !input.empty())
       throw CLI::ValidationError("--vessels",
@@ -127,6 +128,9 @@ int main(int argc, char** argv) {
     if (tree != "classic" && !input.empty())
       throw CLI::ValidationError("--tree",
                                  "the tree is a phantom's; with --input it is the label's");
+    if (phantom_size_given() && !input.empty())
+      throw CLI::ValidationError("--phantom-size",
+                                 "the size is a phantom's; with --input it is the volume's");
   });
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {
@@ -141,6 +145,12 @@ int main(int argc, char** argv) {
         timings_file.empty() || !gimm::path_is_within(timings_file, out),
         "--timings " << timings_file << " lies inside --out " << out
                      << " (the dataset holds no wall-clock times); write it elsewhere");
+    // The timings file is appended to: never one of the input folder's files (it appended JSON
+    // to a patient's volume).
+    GIMM_USAGE_CHECK(
+        timings_file.empty() || input.empty() || !gimm::path_is_within(timings_file, input),
+        "--timings " << timings_file << " lies inside --input " << input
+                     << " (the run would append to its own input); write it elsewhere");
     gimm::cli::refuse_outputs_over_inputs({{"--out", out}, {"--timings", timings_file}},
                                           {{"--input", input}, {"--views", views_file}}, true);
     GIMM_USAGE_CHECK(input.empty() != (phantom_count == 0),
@@ -175,6 +185,13 @@ int main(int argc, char** argv) {
     gimm::DatasetRunOptions run;
     run.shard = gimm::cli::flag_value("--shard (or the array job's index variables)",
                                       [&] { return gimm::resolve_shard(shard_flag); });
+    GIMM_USAGE_CHECK(export_format.empty() || !run.shard.sharded(),
+                     "--export with --shard " << run.shard.index << "/" << run.shard.count
+                                              << ": export after `gimm-dataset merge --export`");
+    GIMM_USAGE_CHECK(export_format.empty() || views_file.empty(),
+                     "--export " << export_format
+                                 << " with --views: the reference layout names each pair by two "
+                                    "distinct view classes, which a listed run does not keep");
     run.quiet = quiet;
     run.timings_file = timings_file;
     run.export_format = export_format;
@@ -187,6 +204,13 @@ int main(int argc, char** argv) {
                                               gimm::parse_phantom_size(phantom_size),
                                               gimm::parse_tree_detail(tree))
                       : gimm::scan_imagecas_folder(input);
+    if (!export_format.empty()) {  // ids the export cannot name: refused before any work
+      std::vector<std::string> ids;
+      for (const auto& source : sources) ids.push_back(source.id);
+      gimm::cli::flag_value("--export " + export_format, [&] {
+        gimm::reference_format::check_patient_ids(ids, "the input's patients");
+      });
+    }
     // Voxels read from outside a header's folder are named (docs/conventions.md, "Detached
     // data files"); a header that cannot be read fails its patient later, by name.
     for (const auto& source : sources)

@@ -80,8 +80,17 @@ int main(int argc, char** argv) {
     std::vector<gimm::NamedPath> outputs;
     for (const char* ext : {".npy", ".png", ".camera.json", ".dcm"})
       outputs.push_back({"--out", out_prefix + ext});
-    gimm::cli::refuse_outputs_over_inputs(outputs,
-                                          {{"--volume", volume_path}, {"--label", label_path}});
+    GIMM_USAGE_CHECK(app.count("--step") == 0 || projector_name == "trilinear",
+                     "--step is the trilinear projector's; --projector " << projector_name
+                                                                         << " walks voxel edges");
+    GIMM_USAGE_CHECK(!std::filesystem::path(out_prefix).filename().empty(),
+                     "--out " << out_prefix << " ends in a folder: give a prefix, e.g. "
+                              << out_prefix
+                              << "view (writes view.png, view.npy, view.camera.json)");
+    auto inputs = gimm::cli::volume_input("--volume", volume_path);
+    for (auto& label_file : gimm::cli::volume_input("--label", label_path))
+      inputs.push_back(std::move(label_file));
+    gimm::cli::refuse_outputs_over_inputs(outputs, inputs);
     gimm::ContrastRecipe recipe;
     recipe.preset = gimm::parse_contrast_preset(recipe_name);
 
@@ -90,6 +99,10 @@ int main(int argc, char** argv) {
           !note.empty())
         std::cerr << "gimm-drr: note: " << note << "\n";
     gimm::Volume<float> ct = gimm::read_volume<float>(volume_path);
+    // More than 100 samples per voxel add nothing to a trilinear interpolant (1e-9 mm hung).
+    GIMM_USAGE_CHECK(step_mm == 0 || step_mm >= ct.spacing().minCoeff() / 100,
+                     "--step " << step_mm << " mm is below 1/100 of the smallest voxel spacing ("
+                               << ct.spacing().minCoeff() << " mm of '" << volume_path << "')");
     std::optional<gimm::Volume<std::uint8_t>> injected;
     if (!label_path.empty()) {
       const auto label = gimm::read_volume<std::uint8_t>(label_path);

@@ -369,6 +369,19 @@ int main(int argc, char** argv) {
     GIMM_USAGE_CHECK(modes <= 1,
                      "give one of --dataset/--predictions, --compare, --truth/--matches or "
                      "--tree/--centerlines");
+    // The name goes into tables and gnuplot scripts: one line of printable text.
+    const auto control = std::find_if(name.begin(), name.end(), [](char c) {
+      return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+    });
+    GIMM_USAGE_CHECK(control == name.end(),
+                     "--name must be one line of printable text, got a control character at "
+                     "position "
+                         << (control - name.begin()));
+    // Flags another mode owns would be ignored: refuse them.
+    GIMM_USAGE_CHECK(!(modes == 1 && !dataset_mode) || app.count("--split") == 0,
+                     "--split chooses a dataset's pairs: it goes with --dataset/--predictions");
+    GIMM_USAGE_CHECK((trees.empty() && centerlines.empty()) || app.count("--top-k") == 0,
+                     "--top-k chooses matches: --tree/--centerlines score every point");
     if (!truths.empty() || !matches.empty())
       return evaluate_user_truth(truths, matches, radius, top_k, out);
     if (!trees.empty() || !centerlines.empty()) {

@@ -49,6 +49,7 @@
 #include "cli_common.hpp"
 #include "gimm/core/progress.hpp"
 #include "gimm/geometry/camera_error.hpp"
+#include "gimm/geometry/epipolar.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
@@ -67,6 +68,15 @@ namespace {
 std::optional<gimm::Camerad> read_camera(const std::string& path) {
   if (path.empty()) return std::nullopt;
   return gimm::camera_from_json(gimm::read_json_file(path), path);
+}
+
+/// A view given as a PNG (`flag`): the matchers need at least 16 x 16 px.
+gimm::Image<float> read_view_png(const char* flag, const std::string& path) {
+  gimm::Image<float> image = gimm::read_png_unit(path);
+  GIMM_CHECK(image.rows() >= 16 && image.cols() >= 16,
+             flag << " '" << path << "' is " << image.cols() << " x " << image.rows()
+                  << " px; the matchers need at least 16 x 16");
+  return image;
 }
 
 struct MatchedCounts {
@@ -252,11 +262,11 @@ int main(int argc, char** argv) {
                  "dataset mode: rotate each view's camera given to the matcher by this many "
                  "degrees about both axes across the view (random signs, --seed), images exact")
       ->capture_default_str()
-      ->check(gimm::cli::at_least(0));
+      ->check(gimm::cli::in_range(0, 45, true));
   app.add_option("--camera-error-mm", camera_error.mm,
                  "dataset mode: shift each view's camera by this many mm (random direction)")
       ->capture_default_str()
-      ->check(gimm::cli::at_least(0));
+      ->check(gimm::cli::in_range(0, 1000, true));
   app.add_option("--noise-photons", degradation.photons,
                  "dataset mode: Poisson noise on the images the matcher sees, photons per "
                  "unattenuated pixel (render/image_degradation.hpp; 0 = none)")
@@ -288,26 +298,30 @@ int main(int argc, char** argv) {
   app.add_option("--isocenter", isocenter,
                  "with --dicom-a/b: A's isocentre X Y Z, patient mm, B's at A's table (default "
                  "0: --tree points relative to it)")
-      ->expected(3);
+      ->expected(3)
+      ->check(gimm::cli::position_mm);
   std::vector<double> isocenter_a, isocenter_b, table_a, table_b;
   double pixel_a = 0, pixel_b = 0;
   app.add_option("--isocenter-a", isocenter_a, "with --dicom-a/b: A's isocentre X Y Z only")
-      ->expected(3);
+      ->expected(3)
+      ->check(gimm::cli::position_mm);
   app.add_option("--isocenter-b", isocenter_b,
                  "with --dicom-a/b: B's isocentre X Y Z at its own table (default: A's)")
-      ->expected(3);
+      ->expected(3)
+      ->check(gimm::cli::position_mm);
   app.add_option("--table-a", table_a,
                  "with --dicom-a/b: A's table LATERAL VERTICAL LONGITUDINAL, mm, replacing the "
                  "file's")
-      ->expected(3);
-  app.add_option("--table-b", table_b, "with --dicom-a/b: B's table, as --table-a")->expected(3);
+      ->expected(3)
+      ->check(gimm::cli::position_mm);
+  app.add_option("--table-b", table_b, "with --dicom-a/b: B's table, as --table-a")
+      ->expected(3)
+      ->check(gimm::cli::position_mm);
   app.add_option("--pixel-a", pixel_a,
                  "with --dicom-a/b: A's detector pixel pitch, mm, replacing the file's")
-      ->check(gimm::cli::Finite)
-      ->check(gimm::cli::Positive);
+      ->check(gimm::cli::pitch_mm);
   app.add_option("--pixel-b", pixel_b, "with --dicom-a/b: B's pitch, as --pixel-a")
-      ->check(gimm::cli::Finite)
-      ->check(gimm::cli::Positive);
+      ->check(gimm::cli::pitch_mm);
   app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)")
       ->check(gimm::cli::at_least(0));
   app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)")
@@ -341,7 +355,7 @@ int main(int argc, char** argv) {
       app.add_option("--threshold", threshold,
                      "learned: coarse confidence a match needs, in [0, 1) (default: the value "
                      "the weights record)")
-          ->check(CLI::Range(0.0, 1.0));
+          ->check(gimm::cli::in_range(0.0, 1.0, false));
   app.add_flag("--snap", options.snap_to_epipolar,
                "move each B point onto its epipolar line after gating (needs a gate; default: "
                "as the weights record)");
@@ -350,7 +364,7 @@ int main(int argc, char** argv) {
              "--input-size", input_size,
              "resize the longer side to N before matching (0: as is; default: the size the weights "
              "were trained at, as they record it)")
-          ->check(gimm::cli::at_least(0));
+          ->check(gimm::cli::zero_or_in(16, 4096));
   app.add_option("--pair", pair,
                  "pair id written into the matches file, e.g. phantom-0000/LCA_00-01");
   app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
@@ -408,6 +422,18 @@ int main(int argc, char** argv) {
     for (const auto& [flag, owner] : method_flags)
       GIMM_USAGE_CHECK(app.count(flag) == 0 || method == owner,
                        flag << " is for --method " << owner << ", not " << method);
+    GIMM_USAGE_CHECK(weights.empty() || method == "learned",
+                     "--weights is for --method learned, not " << method);
+    // Gate flags the chosen gate does not use would be ignored: refuse them.
+    if (app.count("--gate")) {
+      GIMM_USAGE_CHECK(gate != "none" || ((app.count("--snap") == 0 || !options.snap_to_epipolar) &&
+                                          app.count("--delta") == 0 && app.count("--tau") == 0),
+                       "--gate none: --snap, --delta and --tau need a gate");
+      GIMM_USAGE_CHECK(gate != "hard" || app.count("--tau") == 0,
+                       "--tau is the soft/logit gates' temperature, not --gate hard's");
+      GIMM_USAGE_CHECK((gate != "soft" && gate != "logit") || app.count("--delta") == 0,
+                       "--delta is --gate hard's threshold, not --gate " << gate << "'s");
+    }
     GIMM_USAGE_CHECK(
         app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
         "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
@@ -428,7 +454,6 @@ int main(int argc, char** argv) {
       if (method == "learned") {
         matcher = gimm_match::learned_matcher(learned_choice(), options);
       } else if (method == "geometric") {
-        GIMM_USAGE_CHECK(weights.empty(), "--weights is for --method learned, not geometric");
         GIMM_USAGE_CHECK(geometry == "cameras",
                          "--method geometric needs the cameras (--geometry "
                          "cameras), got --geometry "
@@ -436,7 +461,6 @@ int main(int argc, char** argv) {
         geometric.use_masks = !segment;
         matcher = gimm_match::geometric_matcher(geometric);
       } else {
-        GIMM_USAGE_CHECK(weights.empty(), "--weights is for --method learned, not " << method);
         GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
         if (method == "oracle")
           matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
@@ -526,13 +550,25 @@ int main(int argc, char** argv) {
       for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
                                "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
         GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
-      loaded_pair.a = gimm::read_png_unit(image_a);
-      loaded_pair.b = gimm::read_png_unit(image_b);
+      GIMM_USAGE_CHECK(camera_a.empty() == camera_b.empty(),
+                       "give both --camera-a and --camera-b (the pair's geometry), or neither");
+      loaded_pair.a = read_view_png("--image-a", image_a);
+      loaded_pair.b = read_view_png("--image-b", image_b);
       loaded_pair.camera_a = read_camera(camera_a);
       loaded_pair.camera_b = read_camera(camera_b);
       // A PNG carries no shutter: the exposed fields are found in the images.
       loaded_pair.field_a = gimm::exposed_field(loaded_pair.a);
       loaded_pair.field_b = gimm::exposed_field(loaded_pair.b);
+    }
+    if (loaded_pair.camera_a && loaded_pair.camera_b) {
+      try {  // two views from one place (a file given twice) have no epipolar geometry
+        static_cast<void>(
+            gimm::fundamental_from_cameras(*loaded_pair.camera_a, *loaded_pair.camera_b));
+      } catch (const gimm::Error& e) {
+        const std::string a = camera_a.empty() ? "--dicom-a " + dicom_a : "--camera-a " + camera_a;
+        const std::string b = camera_b.empty() ? "--dicom-b " + dicom_b : "--camera-b " + camera_b;
+        throw gimm::Error(std::string(e.what()) + " (" + a + ", " + b + ")");
+      }
     }
     GIMM_USAGE_CHECK(method != "geometric" || (loaded_pair.camera_a && loaded_pair.camera_b),
                      "--method geometric on one pair needs the cameras: --camera-a and "

@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"classic", "rich"}))
       ->capture_default_str();
   app.add_option("--noise", noise, "scanner noise sigma, HU")
-      ->check(gimm::cli::at_least(0))
+      ->check(gimm::cli::in_range(0, 1000, true))
       ->capture_default_str();
   app.add_flag("--preview", preview, "also write S.slice.png and S.mip.png");
   return gimm::cli::run(app, argc, argv, [&] {

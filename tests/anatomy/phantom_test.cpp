@@ -192,6 +192,18 @@ TEST_CASE("Centerlines JSON round trip and errors", "[anatomy][phantom][io]") {
                       Catch::Contains("parent.json") && Catch::Contains("'parent'") &&
                           Catch::Contains(parent.dump()));
   }
+  // A system that is none names the file and the branch; a tree of no branches is no truth
+  // (it scored "mean distance inf mm").
+  auto k = gimm::to_json(p.centerlines);
+  k["branches"][0]["system"] = "XYZ";
+  CHECK_THROWS_AS(gimm::centerlines_from_json(k, "system.json"), gimm::FormatError);
+  CHECK_THROWS_WITH(gimm::centerlines_from_json(k, "system.json"),
+                    Catch::Contains("system.json") && Catch::Contains("XYZ") &&
+                        Catch::Contains("branch '" + p.centerlines.branches[0].name + "'"));
+  k = gimm::to_json(p.centerlines);
+  k["branches"] = nlohmann::json::array();
+  CHECK_THROWS_WITH(gimm::centerlines_from_json(k, "empty.json"),
+                    Catch::Contains("empty.json") && Catch::Contains("no branches"));
 }
 
 TEST_CASE("Injected coronaries appear in the DRR exactly where their centerlines project",

@@ -245,6 +245,15 @@ tree_in = os.path.join(TMP, "tree_in.json")
 run("gimm-centerlines", "--label", label, "--out", tree_in)
 unchanged_after(tree_in, "gimm-centerlines", "--label", label, "--truth", tree_in, "--out",
                 os.path.join(TMP, ".", "tree_in.json"), contains="is the input --truth")
+# A bad --truth fails the run before --out exists (it was written first, then the truth read).
+bad_truth = os.path.join(TMP, "bad_truth.json")
+open(bad_truth, "w").write("{bad")
+never = os.path.join(TMP, "never_written.json")
+if os.path.exists(never):
+    os.remove(never)
+run("gimm-centerlines", "--label", label, "--truth", bad_truth, "--out", never, ok=False,
+    contains="bad_truth.json")
+check(not os.path.exists(never), "gimm-centerlines wrote --out before it read a bad --truth")
 cam_in = os.path.join(TMP, "cam_in.json")
 open(cam_in, "w").write(run("gimm-carm", "--primary", 30, "--secondary", 20, "--rows", 64,
                             "--cols", 64))
@@ -259,6 +268,15 @@ unchanged_after(cam_in, "gimm-match", "--method", "geometric", "--image-a", png,
 unchanged_after(png, "gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png,
                 "--camera-a", cam_in, "--camera-b", cam_in, "--picture", png,
                 contains="--picture " + png + " is the input --image-a")
+# Two outputs that are one file: refused before anything is written (it failed "cannot move"
+# and left the file behind).
+both = os.path.join(TMP, "both_outputs")
+if os.path.exists(both):
+    os.remove(both)
+run("gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png, "--camera-a",
+    cam_in, "--camera-b", cam_in, "--out", both, "--picture", both, ok=False,
+    contains="are one file")
+check(not os.path.exists(both), "gimm-match left a file behind when --out and --picture clash")
 weights_in = os.path.join(TMP, "w.safetensors")
 shutil.copy(os.path.join(os.path.dirname(__file__), "..", "..", "weights",
                          "gimm-phantom-128.safetensors"), weights_in)
@@ -269,5 +287,83 @@ run("gimm-phantom", "--seed", 4, "--out", os.path.join(src, "patients", "7"))
 volume = os.path.join(src, "patients", "7", "4.img.nii.gz")
 unchanged_after(volume, "gimm-dataset", "--input", os.path.join(src, "patients", "7"), "--out",
                 src, contains="lies inside the output --out")
+
+# Errors name what is wrong even when the input is hostile.
+# Header bytes are escaped: a NUL no longer cuts the message, an ESC cannot drive the terminal.
+nul = os.path.join(TMP, "nul.nrrd")
+open(nul, "wb").write(b"NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nspacings: 1 1 1\n"
+                      b"encoding: raw\nendian: little\nfoo\x00bar: 1\n\n" + bytes(256))
+proc = h.run("gimm-centerlines", "--label", nul, "--out", os.path.join(TMP, "n.json"), ok=False,
+             contains="foo\\x00bar")
+esc = os.path.join(TMP, "esc.mha")
+open(esc, "wb").write(b"ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\n"
+                      b"ElementType = MET_\x1b[31mFLOAT\x07\nElementDataFile = LOCAL\n")
+proc = h.run("gimm-centerlines", "--label", esc, "--out", os.path.join(TMP, "n.json"), ok=False,
+             contains="MET_\\x1b[31mFLOAT\\x07")
+check("\x1b" not in proc.stderr and "\x07" not in proc.stderr, "a header's ESC/BEL reached stderr")
+# A volume larger than the process may allocate: the error names the header, not bad_alloc.
+big = os.path.join(TMP, "big.nhdr")
+open(big, "w").write("NRRD0004\ntype: float\ndimension: 3\nsizes: 1024 1024 256\n"
+                     "spacings: 0.5 0.5 0.5\nencoding: raw\nendian: little\ndata file: big.raw\n")
+with open(os.path.join(TMP, "big.raw"), "wb") as f:
+    f.truncate(1 << 30)  # sparse: no disk used
+
+
+def limit_memory():
+    import resource
+    resource.setrlimit(resource.RLIMIT_AS, (700 << 20, 700 << 20))
+
+
+import subprocess
+proc = subprocess.run([os.path.join(BIN, "gimm-centerlines"), "--label", big, "--out",
+                       os.path.join(TMP, "n.json")], capture_output=True, text=True,
+                      preexec_fn=limit_memory)
+if "Sanitizer" in proc.stderr:  # ASan reserves terabytes of shadow memory: no RLIMIT_AS there
+    print("cli_test: the memory-limit case skipped (a sanitizer build cannot run under RLIMIT_AS)")
+else:
+    check(proc.returncode == 1 and "big.nhdr" in proc.stderr and "not enough memory" in proc.stderr
+          and "std::bad_alloc" not in proc.stderr,
+          f"a volume over the memory limit: want a named error, got {proc.returncode} "
+          f"{proc.stderr!r}")
+# Pictures too small or too wide for the matchers, and a camera of absurd magnitude.
+tiny = os.path.join(TMP, "tiny.png")
+Image.fromarray(np.zeros((1, 1), np.uint8)).save(tiny)
+run("gimm-match", "--method", "geometric", "--image-a", tiny, "--image-b", png, "--camera-a",
+    cam_in, "--camera-b", cam_in, ok=False, contains="--image-a '" + tiny + "' is 1 x 1 px")
+wide = os.path.join(TMP, "wide.png")
+Image.fromarray(np.zeros((2, 40000), np.uint8)).save(wide)
+run("gimm-match", "--method", "geometric", "--image-a", png, "--image-b", wide, "--camera-a",
+    cam_in, "--camera-b", cam_in, ok=False, contains="header 40000 x 2 px")
+huge_k = json.load(open(cam_in))
+huge_k["K"][0][0] = 1e308
+huge_k.pop("P")
+cam_huge = os.path.join(TMP, "cam_huge.json")
+json.dump(huge_k, open(cam_huge, "w"))
+run("gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png, "--camera-a",
+    cam_huge, "--camera-b", cam_in, ok=False, contains="1e+308")
+
+# A detached header whose data file is an output: refused, the data left as it was (gimm-drr
+# replaced o.npy, the volume's voxels; gimm-centerlines wrote its JSON over a label's data).
+det = os.path.join(TMP, "detached")
+os.makedirs(det, exist_ok=True)
+open(os.path.join(det, "o.npy"), "wb").write(np.zeros(16 * 16 * 8, np.int16).tobytes())
+open(os.path.join(det, "v.nhdr"), "w").write(
+    "NRRD0004\ntype: short\ndimension: 3\nsizes: 16 16 8\nspacings: 1 1 1\nencoding: raw\n"
+    "endian: little\ndata file: o.npy\n")
+unchanged_after(os.path.join(det, "o.npy"), "gimm-drr", "--volume", os.path.join(det, "v.nhdr"),
+                "--primary", 30, "--secondary", 0, "--rows", 32, "--cols", 32, "--out",
+                os.path.join(det, "o"), contains="--volume's data file")
+unchanged_after(os.path.join(det, "o.npy"), "gimm-centerlines", "--label",
+                os.path.join(det, "v.nhdr"), "--out", os.path.join(det, "o.npy"),
+                contains="--label's data file")
+# A trilinear step far below a voxel hung the renderer: a usage error naming --step.
+run("gimm-drr", "--volume", os.path.join(det, "v.nhdr"), "--primary", 30, "--secondary", 0,
+    "--rows", 32, "--cols", 32, "--projector", "trilinear", "--step", "1e-9", "--out",
+    os.path.join(det, "s"), ok=False, contains="--step 1e-09")
+
+# One camera given as both views: no epipolar geometry, and the error names the two files.
+run("gimm-match", "--method", "geometric", "--image-a", png, "--image-b", png, "--camera-a",
+    cam_in, "--camera-b", cam_in, ok=False, contains="--camera-b " + cam_in)
+run("gimm-carm", "--pair", cam_in, cam_in, ok=False, contains="--pair " + cam_in)
 
 h.finish("cli_test")

@@ -322,7 +322,7 @@ same_tree(full, out, "a refused resume")
 # --export with --shard is refused before any work.
 out = os.path.join(TMP, "shard_export")
 proc = run(COMMON + ["--out", out, "--shard", "0/2", "--export", "reference"], ok=False)
-check(proc.returncode != 0 and "--export with --shard 0/2" in proc.stderr and
+check(proc.returncode == 2 and "--export with --shard 0/2" in proc.stderr and
       not os.path.exists(os.path.join(out, "patients")), f"--export with --shard: {proc.stderr}")
 
 # Flags that would set nothing are refused, before any work.
@@ -530,7 +530,8 @@ for f in ["img", "label"]:
     shutil.copy(os.path.join(folder, f"1.{f}.nii.gz"), os.path.join(bad_ids, f"case_2.{f}.nii.gz"))
 out = os.path.join(TMP, "bad_ids_out")
 proc = run(["--input", bad_ids, "--out", out, "--export", "reference"] + FOLDER, ok=False)
-check("--export reference: patient id 'case_2'" in proc.stderr and "at '_'" in proc.stderr and
+check(proc.returncode == 2 and "--export reference" in proc.stderr and
+      "patient id 'case_2'" in proc.stderr and "at '_'" in proc.stderr and
       not os.path.exists(os.path.join(out, "patients")), f"--export with a bad id: {proc.stderr}")
 # An unfinished patient folder written in place (by a killed run of an older gimm), even with a
 # folder in the way of one of its files: the patient is made in its staging folder and replaces

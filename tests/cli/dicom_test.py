@@ -108,7 +108,7 @@ run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--method", 
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--out", out, ok=False,
     contains="cannot be told from the angles")
 run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--pixel-a", 0,
-    "--method", "geometric", "--out", out, ok=False, contains="--pixel-a: must be > 0, got 0")
+    "--method", "geometric", "--out", out, ok=False, contains="--pixel-a: must be in [0.001, 10000], got 0")
 # One view's geometry given by hand: B's camera JSON replaces B's tags, A keeps its file's.
 p = run("gimm-match", "--dicom-a", T("a.dcm"), "--dicom-b", T("b.dcm"), "--method", "geometric",
         "--isocenter", *iso, "--camera-b", T("b.camera.json"), "--table-a", 0, 0, 0)

@@ -42,4 +42,28 @@ check(os.path.getsize(os.path.join(TMP, "cmp", "compare.png")) > 1000, "compare 
 p = run("gimm-eval", "--dataset", os.path.join(TMP, "nope"), "--predictions",
         os.path.join(TMP, "p_o0"), ok=False)
 check("nope" in p.stderr, "missing dataset is named")
+# Files of a dataset that parse but cannot be right are refused, naming the file: a mask of
+# another size than its view, an F of zeros (both were scored: wrong pixels, null figures).
+bad = os.path.join(TMP, "ds_bad")
+shutil.rmtree(bad, ignore_errors=True)
+shutil.copytree(ds, bad)
+patient = sorted(os.listdir(os.path.join(bad, "patients")))[0]
+pair_dir = os.path.join(bad, "patients", patient, "pairs")
+first_pair = sorted(os.listdir(pair_dir))[0]
+view_a = json.load(open(os.path.join(pair_dir, first_pair)))["view_a"]
+mask = os.path.join(bad, "patients", patient, "views", view_a + ".mask.png")
+shutil.copy(os.path.join(bad, "patients", patient, "views", view_a + ".mask.png"), mask + ".orig")
+from PIL import Image  # noqa: E402
+Image.new("L", (1, 1)).save(mask)
+p = run("gimm-eval", "--dataset", bad, "--predictions", os.path.join(TMP, "p_o0"), ok=False,
+        contains=view_a + ".mask.png' is 1 x 1 px, but")
+run("gimm-baseline", "--dataset", bad, "--method", "oracle", "--out", os.path.join(TMP, "p_bad"),
+    ok=False, contains="is 1 x 1 px")
+shutil.move(mask + ".orig", mask)
+labels = json.load(open(os.path.join(pair_dir, first_pair)))
+labels["F"] = [[0, 0, 0]] * 3
+json.dump(labels, open(os.path.join(pair_dir, first_pair), "w"))
+run("gimm-eval", "--dataset", bad, "--predictions", os.path.join(TMP, "p_o0"), ok=False,
+    contains="'F' is all zeros")
+
 h.finish("eval_test")

@@ -14,6 +14,7 @@ import shutil
 import sys
 
 import numpy as np
+from PIL import Image
 
 from harness import Harness
 
@@ -164,8 +165,12 @@ check(os.path.exists(os.path.join(TMP, "pair.png")), "--picture wrote nothing")
 if os.path.exists(os.path.join(TMP, "pair.png")):
     with open(os.path.join(TMP, "pair.png"), "rb") as f:
         head = f.read(24)
-    check(int.from_bytes(head[16:20], "big") == 312 and int.from_bytes(head[20:24], "big") == 132,
-          "picture is not the two views side by side (312 x 132)")
+    # Two 156 x 132 views side by side over a legend of 3 lines (with F) of 10 px, 2 px below.
+    check(int.from_bytes(head[16:20], "big") == 312 and int.from_bytes(head[20:24], "big") == 164,
+          "picture is not the two views side by side (312 x 132) over a 32 px legend")
+    legend = np.asarray(Image.open(os.path.join(TMP, "pair.png")))[132:]
+    check((legend > 200).any() and (legend[..., 2] > legend[..., 0] + 100).any(),
+          "the legend has no grey text or no blue line of text")
 
 # Bad input: a clear message naming the input, exit 1, no output file.
 run("gimm-drr", "--volume", vol + ".img.nii.gz", "--primary", 0, "--secondary", 0, "--rows", 120,
@@ -182,7 +187,7 @@ cases = [
     ("png", ["--image-a", A, "--image-b", bad_png, "--weights", WEIGHTS], "bad.png"),
     ("weights", ["--image-a", A, "--image-b", B, "--weights", truncated], "truncated.safetensors"),
     ("class", [*base[:6], "--class-a", 12], "--class-a: Value 12 not in range 0 to 11"),
-    ("one camera", [*base, "--camera-a", CA], "both cameras"),
+    ("one camera", [*base, "--camera-a", CA], "both --camera-a and --camera-b"),
     ("camera size", [*base, "--camera-a", CA, "--camera-b", os.path.join(TMP, "c.camera.json")], "camera B"),
     ("picture dir", [*base, "--picture", os.path.join(TMP, "no", "such", "dir", "p.png")], "p.png"),
     ("dataset flags", ["--dataset", TMP, "--weights", WEIGHTS, "--class-a", 3], "--class-a"),

@@ -92,3 +92,17 @@ TEST_CASE("GIMM_FAIL always throws", "[core][error]") {
       }(),
       "gimm: mode must be one of a|b, got 'c'");
 }
+
+TEST_CASE("Error messages escape control bytes quoted from an input", "[core][error]") {
+  // A NUL no longer ends the message where what() is read as a C string; ESC and BEL cannot
+  // drive the terminal; newlines and tabs stay.
+  const std::string field = std::string("foo") + '\0' + "bar\x1b[31m\x07\x7f";
+  try {
+    GIMM_CHECK_AS(gimm::FormatError, false, "unknown field '" << field << "'\n\tline 8");
+    FAIL("no throw");
+  } catch (const gimm::FormatError& e) {
+    CHECK(std::string(e.what()) ==
+          "gimm: unknown field 'foo\\x00bar\\x1b[31m\\x07\\x7f'\n\tline 8");
+  }
+  CHECK(gimm::printable("plain \xc3\xa9 text") == "plain \xc3\xa9 text");  // UTF-8 kept
+}

@@ -257,6 +257,15 @@ TEST_CASE("Volume view: reads and writes the caller's buffer; copies own theirs"
   VolumeGeometry bad = g;
   bad.spacing[1] = 0;
   CHECK_THROWS_WITH(Volume<float>::view(bad, buffer.data()),
-                    Catch::Contains("Volume view: spacing 1 must be finite and > 0, got 0"));
+                    Catch::Contains("Volume view: spacing 1 must be in [1e-4, 1e4] mm, got 0"));
+  // Finite but beyond any scanner: a 1e30 mm voxel failed later as a camera "beyond 1e9".
+  bad = g;
+  bad.spacing[0] = 1e30;
+  CHECK_THROWS_WITH(Volume<float>::view(bad, buffer.data()),
+                    Catch::Contains("spacing 0") && Catch::Contains("1e+30"));
+  bad = g;
+  bad.origin[2] = -1e12;
+  CHECK_THROWS_WITH(Volume<float>::view(bad, buffer.data()),
+                    Catch::Contains("origin 2") && Catch::Contains("-1e+12"));
   CHECK_THROWS_WITH(Volume<float>::view(g, nullptr), Catch::Contains("no buffer"));
 }

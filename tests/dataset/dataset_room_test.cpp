@@ -192,6 +192,21 @@ TEST_CASE("Dataset reader: wrong JSON types and huge numbers name the file and t
                     Catch::Contains(manifest) && Catch::Contains("1e999"));
 }
 
+TEST_CASE("Dataset reader: a pair file's views are names, its F no zero matrix", "[dataset]") {
+  using Catch::Contains;
+  const json F = {{0, 0, 0}, {0, 0, -1}, {0, 1, 0}};
+  json pair = {{"view_a", "LCA_00"}, {"view_b", "LCA_01"}, {"F", F}, {"dense", json::array()}};
+  json bad = pair;
+  bad["view_a"] = "../../../x";  // read views/../../../x.mask.png before
+  CHECK_THROWS_WITH(gimm::pair_truth_from_json(bad, "p/LCA_00-01", "pair.json"),
+                    Contains("pair.json") && Contains("view_a '../../../x'"));
+  bad = pair;
+  bad["F"] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // turned every epipolar figure into null
+  CHECK_THROWS_AS(gimm::pair_truth_from_json(bad, "p/LCA_00-01", "pair.json"), gimm::FormatError);
+  CHECK_THROWS_WITH(gimm::pair_truth_from_json(bad, "p/LCA_00-01", "pair.json"),
+                    Contains("pair.json") && Contains("'F' is all zeros"));
+}
+
 TEST_CASE("Dataset merge: shards of one run only", "[dataset]") {
   const fs::path root = fresh("merge");
   const gimm::DatasetWriter writer(root);
@@ -223,6 +238,49 @@ TEST_CASE("Dataset merge: shards of one run only", "[dataset]") {
   const auto split = gimm::read_file_bytes(root / "splits" / "train.txt");
   CHECK(std::string(split.begin(), split.end()) == "a\nb\n");
   CHECK_FALSE(fs::exists(root / "manifest.shard-0-of-2.json"));
+}
+
+TEST_CASE("Dataset merge: shards that disagree on their patients are refused", "[dataset]") {
+  using Catch::Contains;
+  const fs::path root = fresh("merge_bad");
+  const gimm::DatasetWriter writer(root);
+  const auto shard = [&](int index, nlohmann::json patients) {
+    writer.write_manifest({{"format", gimm::kDatasetFormat},
+                           {"parameters", {{"seed", 0}}},
+                           {"input", {{"phantom", 2}}},
+                           {"shard", {{"index", index}, {"count", 2}}},
+                           {"patients", std::move(patients)}},
+                          {index, 2});
+  };
+  const auto ok = [](const std::string& id, const std::string& split = "train") {
+    return nlohmann::json{{"id", id}, {"status", "ok"}, {"split", split}};
+  };
+  // Shard 0's patients copied into shard 1's manifest: p0 twice, p1 lost.
+  shard(0, {ok("p0")});
+  shard(1, {ok("p0")});
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""), Contains("patient 'p0' is in") &&
+                                                       Contains("manifest.shard-0-of-2.json") &&
+                                                       Contains("manifest.shard-1-of-2.json"));
+  // p1 lost from shard 1: p2, shard 0's, stands where p1 should.
+  shard(0, {ok("p0"), ok("p2")});
+  shard(1, {ok("p3")});
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""),
+                    Contains("'p2'") && Contains("belongs to shard 1") && Contains("missing"));
+  // Ids that are no folder name, splits that are none, and records that are no records.
+  shard(1, {ok("../evil")});
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""), Contains("../evil"));
+  shard(1, {ok("p1", "bogus")});
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""), Contains("bogus") && Contains("split"));
+  shard(1, "p1");
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""), Contains("manifest.shard-1-of-2.json") &&
+                                                       Contains("'patients' must be an array"));
+  shard(1, {{{"status", "ok"}}});
+  CHECK_THROWS_WITH(gimm::merge_dataset(root, ""),
+                    Contains("manifest.shard-1-of-2.json") && Contains("string 'id'"));
+  CHECK_FALSE(fs::exists(root / "manifest.json"));  // nothing merged on failure
+  shard(0, {ok("p0"), ok("p2")});
+  shard(1, {ok("p1"), ok("p3", "val")});
+  CHECK(gimm::merge_dataset(root, "").manifest.at("patients").size() == 4);
 }
 
 TEST_CASE("Dataset run: a finished patient made with other parameters is refused", "[dataset]") {

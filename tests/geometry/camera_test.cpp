@@ -209,6 +209,14 @@ TEST_CASE("Camera constructor rejects invalid K, R, size", "[geometry][camera]")
   badK = K;
   badK(0, 0) = 0;
   CHECK_THROWS_WITH(Camerad(P, badK, R, t, 10, 20), Contains("zero focal"));
+  // Finite but absurd: K = 1e308 failed much later ("share their centre"); now at the camera.
+  badK = K;
+  badK(0, 0) = 1e308;
+  CHECK_THROWS_WITH(Camerad(P, badK, R, t, 10, 20), Contains("1e+308") && Contains("+-1e9"));
+  CHECK_THROWS_WITH(Camerad(P, K, R, Eigen::Vector3d(0, 0, 2e9), 10, 20), Contains("2e+09"));
+  badK = K;
+  badK(0, 0) = 1e9;  // the bound itself is a camera
+  CHECK_NOTHROW(Camerad(P, badK, R, t, 10, 20));
   Eigen::Matrix3d reflection = R;
   reflection.row(2) *= -1;  // orthonormal, det -1
   CHECK_THROWS_WITH(Camerad(P, K, reflection, t, 10, 20), Contains("rotation"));

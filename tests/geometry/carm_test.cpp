@@ -251,6 +251,29 @@ TEST_CASE("CArm::validate names the bad field and value", "[geometry][carm]") {
   carm = CArm{};
   carm.principal_point = Eigen::Vector2d(std::nan(""), 3);
   CHECK_THROWS_AS(carm.camera(), Error);
+  // Finite but beyond any C-arm: refused here, naming the field (they made a camera whose K or
+  // t is beyond 1e9, refused later without the flag's name).
+  carm = CArm{};
+  carm.pixel_mm = 1e-7;
+  CHECK_THROWS_WITH(carm.camera(), Contains("pixel size") && Contains("1e-07"));
+  carm = CArm{};
+  carm.sod_mm = 1e8;
+  carm.sid_mm = 1e9;
+  CHECK_THROWS_WITH(carm.camera(), Contains("SOD") && Contains("1e+08"));
+  carm = CArm{};
+  carm.isocenter.x() = 1e12;
+  CHECK_THROWS_WITH(carm.camera(), Contains("isocentre") && Contains("1e+12"));
+  carm = CArm{};
+  carm.table_mm.z() = -2e5;
+  CHECK_THROWS_WITH(carm.camera(), Contains("table") && Contains("-200000"));
+  carm = CArm{};
+  carm.principal_point = Eigen::Vector2d(1e12, 3);
+  CHECK_THROWS_WITH(carm.camera(), Contains("principal point") && Contains("1e+12"));
+  carm = CArm{};
+  carm.pixel_mm = CArm::kMinPixelMm;  // the bounds themselves make cameras
+  carm.sid_mm = CArm::kMaxDistanceMm;
+  carm.isocenter = Eigen::Vector3d::Constant(CArm::kMaxPositionMm);
+  CHECK_NOTHROW(carm.camera());
   // The limits themselves are valid.
   CHECK_NOTHROW(pose(180, 89.9).camera());
   CHECK_NOTHROW(pose(-180, -89.9).camera());

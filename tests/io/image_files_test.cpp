@@ -68,6 +68,18 @@ TEST_CASE("PNG errors name the file", "[io][png]") {
   CHECK_THROWS_WITH(gimm::read_png16(q), Catch::Contains(q.string()));
   CHECK_THROWS_WITH(gimm::write_png(tmp_path("empty.png"), gimm::Image<std::uint8_t>()),
                     Catch::Contains("empty"));
+  // A folder where a file belongs: it said "error reading" (fopen opens folders on Linux).
+  const auto folder = tmp_path("a_folder.png");
+  fs::create_directories(folder);
+  CHECK_THROWS_WITH(gimm::read_png16(folder),
+                    Catch::Contains(folder.string()) && Catch::Contains("is a folder, not a file"));
+  // The size libpng refuses to read is said, from the header's own bytes.
+  std::vector<unsigned char> wide = gimm::read_file_bytes(q);
+  const unsigned char width[4] = {0, 0, 0x9c, 0x40};  // 40000
+  std::memcpy(wide.data() + 16, width, 4);
+  const auto w = tmp_path("wide.png");
+  std::ofstream(w, std::ios::binary).write(reinterpret_cast<const char*>(wide.data()), wide.size());
+  CHECK_THROWS_WITH(gimm::read_png16(w), Catch::Contains("header 40000 x 8 px"));
 }
 
 TEST_CASE("PNG whose header claims more than its data can hold is refused before allocating",

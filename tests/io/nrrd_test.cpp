@@ -295,6 +295,15 @@ TEST_CASE("NRRD data that is short, long, or claimed absurdly large is an error 
   CHECK_THAT(msg, Catch::Contains("truncated") && Catch::Contains("need 120 bytes") &&
                       Catch::Contains("found 100") && Catch::Contains(short_raw.string()));
 
+  // A data file that is not there: the error names the header and its field (it named only
+  // the data file).
+  const auto gone = tmp("gone.nhdr");
+  write_text(gone, header(tmp("gone.raw").string()));
+  CHECK_THROWS_AS(gimm::read_nrrd<float>(gone), gimm::IoError);
+  CHECK_THROWS_WITH(gimm::read_nrrd<float>(gone),
+                    Catch::Contains("gone.nhdr") && Catch::Contains("field 'data file'") &&
+                        Catch::Contains("gone.raw") && Catch::Contains("does not exist"));
+
   // Attached data cut short, and attached data with bytes after the voxels.
   msg = nrrd_error("cut.nrrd", header("") + "\n",
                    std::vector<unsigned char>(raw.begin(), raw.begin() + 119));

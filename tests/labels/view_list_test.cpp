@@ -79,6 +79,7 @@ TEST_CASE("View list: bad input is refused naming the field and value", "[labels
   fails(list_of(json::array()), "non-empty array");
   fails(list_of(json{{"system", "LCA"}}), "non-empty array");
   fails({{"format", "gimm-views/1"}, {"pairs", {good}}, {"pair", 1}}, "unknown field 'pair'");
+  fails({{"format", "gimm-views/1"}, {"pairs", {good}}, {"note", 5}}, "'note' is free text");
 
   json bad = good;
   bad["system"] = "LAD";
@@ -101,6 +102,11 @@ TEST_CASE("View list: bad input is refused naming the field and value", "[labels
   bad = good;
   bad["b"] = pose(0.5, 0);
   fails(list_of({bad}), "0.5 degrees apart");
+  // The documented minimum itself is a pair: 30 and 31 degrees came out 0.99999... apart.
+  json one_degree = good;
+  one_degree["a"] = pose(30, 0);
+  one_degree["b"] = pose(31, 0);
+  CHECK_NOTHROW(view_list_from_json(list_of({one_degree}), "list.json"));
   bad = good;
   bad["a"] = 30;
   fails(list_of({bad}), "a pose must be an object");

@@ -342,7 +342,7 @@ TEST_CASE("Reference export: ids are checked before anything is written", "[pipe
                          {"parameters", {{"view_mode", "listed"}}},
                          {"patients", {{{"id", "7"}, {"split", "train"}, {"status", "ok"}}}}});
   CHECK_THROWS_WITH(gimm::export_reference(dataset, out),
-                    Catch::Contains("made with --views") &&
+                    Catch::Contains("made from a view list") &&
                         Catch::Contains((dataset / "manifest.json").string()));
   CHECK(!fs::exists(out));
 }

@@ -290,7 +290,7 @@ class RenderValues(unittest.TestCase):
             gimm.Renderer(p["hu"], geometry=p["geometry"], recipe="none")
         with self.assertRaisesRegex(IndexError, r"voxel \(128, 0, 0\) is outside"):
             hu[128, 0, 0]
-        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be finite and > 0, got -1"):
+        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be in \\[1e-4, 1e4\\] mm, got -1"):
             gimm.Volume(p["hu"], spacing=[-1, 1, 1])
         with self.assertRaisesRegex(ValueError, "Volume: expected a 3D array"):
             gimm.Volume(np.zeros((4, 4), np.float32))
@@ -481,7 +481,7 @@ class BadInput(unittest.TestCase):
             gimm.Renderer(hu, geometry=g, recipe={"preset": "angiography", "lumen": 1})
         with self.assertRaisesRegex(ValueError, r"spacing: expected shape \(3,\), got \(2,\)"):
             gimm.Renderer(hu, spacing=[1, 1])
-        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be finite and > 0"):
+        with self.assertRaisesRegex(gimm.Error, "spacing 0 must be in"):
             gimm.Renderer(hu, spacing=[0, 1, 1])
         with self.assertRaisesRegex(TypeError, "expected a gimm.Camera or gimm.CArm"):
             renderer().render("AP")

@@ -117,11 +117,13 @@ def init_ranks(kind):
     return 0, 1, device
 
 
-def all_stop(stop, world, device):
-    """True on every rank when any rank wants to stop."""
+def agree(wanted, world, device):
+    """True on every rank when any rank wants it. Every decision that leads to a collective
+    (stopping, checkpointing) goes through here: decided on each rank's own clock, one rank
+    would checkpoint (all_gather) while the other stopped, and the one left spun forever."""
     if world == 1:
-        return stop
-    flag = torch.tensor([1.0 if stop else 0.0], device=device)
+        return wanted
+    flag = torch.tensor([1.0 if wanted else 0.0], device=device)
     dist.all_reduce(flag, op=dist.ReduceOp.MAX)
     return bool(flag.item())
 
@@ -457,7 +459,7 @@ def main(argv=None):
     while True:
         out_of_time = (time.time() - start > args.minutes * 60 or step >= args.steps
                        or (args.stop_at and step >= args.stop_at))
-        if all_stop(out_of_time, world, device):
+        if agree(out_of_time, world, device):
             break
         if stream:
             samples = [next(stream) for _ in range(args.batch)]
@@ -493,7 +495,7 @@ def main(argv=None):
                                   "time_s": time.time() - start}) + "\n")
             log.flush()
             seen_window, t_window = 0, time.time()
-        if time.time() - last_ckpt > args.checkpoint_minutes * 60:
+        if agree(time.time() - last_ckpt > args.checkpoint_minutes * 60, world, device):
             checkpoint()
             last_ckpt = time.time()
         if rank == 0 and val and time.time() - last_val > args.val_minutes * 60:
@@ -508,6 +510,14 @@ def main(argv=None):
               f"{(time.time() - start) / 60:.1f} min; CPU time so far {cpu / 3600:.2f} h", flush=True)
     if world > 1:
         dist.destroy_process_group()
+        # PyTorch 1.13's gloo teardown can deadlock at interpreter exit: the DDP reducer's
+        # destructor joins a gloo worker thread that waits for the GIL the destructor holds (seen
+        # as a rank spinning after its run had ended). Everything is written: leave now.
+        if log:
+            log.close()
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
 
 
 def run_validation(model, val, args, step, log, best):

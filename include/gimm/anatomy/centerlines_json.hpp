@@ -37,7 +37,14 @@ inline CenterlineTree centerlines_from_json(const nlohmann::json& j, const std::
     for (const auto& b : j.at("branches")) {
       CenterlineBranch br;
       br.name = b.at("name").get<std::string>();
-      br.system = parse_coronary_system(b.at("system").get<std::string>());
+      try {
+        br.system = parse_coronary_system(b.at("system").get<std::string>());
+      } catch (const nlohmann::json::exception&) {
+        throw;
+      } catch (const Error& e) {  // its message names no file
+        throw FormatError("gimm: " + what + ": branch '" + br.name +
+                          "': " + std::string(e.what()).substr(6));
+      }
       const nlohmann::json& parent = b.at("parent");
       GIMM_CHECK_AS(FormatError, json_int_in(parent, -1, std::numeric_limits<int>::max()),
                     what << ": branch '" << br.name
@@ -54,6 +61,8 @@ inline CenterlineTree centerlines_from_json(const nlohmann::json& j, const std::
   } catch (const nlohmann::json::exception& e) {
     throw FormatError("gimm: " + what + ": malformed centerlines: " + e.what());
   }
+  // An empty tree scores as an infinite distance and every figure '-': refuse it.
+  GIMM_CHECK_AS(FormatError, !tree.branches.empty(), what << ": the tree has no branches");
   try {
     tree.validate(what);
   } catch (const Error& e) {

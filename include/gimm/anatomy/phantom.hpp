@@ -354,8 +354,9 @@ struct TissueHu {
 inline Phantom make_phantom(const PhantomOptions& options) {
   using Eigen::Vector3d;
   using namespace detail;
-  GIMM_CHECK(std::isfinite(options.noise_hu) && options.noise_hu >= 0,
-             "make_phantom: noise_hu must be finite and >= 0, got " << options.noise_hu);
+  // HU are stored as int16: a sigma past its range saturates every voxel.
+  GIMM_CHECK(std::isfinite(options.noise_hu) && options.noise_hu >= 0 && options.noise_hu <= 1000,
+             "make_phantom: noise_hu must be in [0, 1000] HU, got " << options.noise_hu);
   Rng rng(options.seed);
   Phantom out;
   out.options = options;

@@ -11,13 +11,34 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace gimm {
 
-/// Base of every exception gimm throws.
+/// `text` safe to print on a terminal: control bytes (a header's ESC or BEL, a NUL that would
+/// cut the message short) and DEL as \xNN; newlines and tabs stay.
+inline std::string printable(std::string_view text) {
+  static const char* const hex = "0123456789abcdef";
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && c != '\n' && c != '\t') || byte == 0x7f) {
+      out += "\\x";
+      out += hex[byte >> 4];
+      out += hex[byte & 15];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+/// Base of every exception gimm throws. Its message is printable(): bytes quoted from a bad
+/// input cannot drive the terminal or end the message early.
 class Error : public std::runtime_error {
  public:
-  explicit Error(const std::string& what) : std::runtime_error(what) {}
+  explicit Error(const std::string& what) : std::runtime_error(printable(what)) {}
 };
 
 /// A file or stream could not be opened, read or written.

@@ -55,9 +55,12 @@ struct VolumeGeometry {
     for (int a = 0; a < 3; ++a) {
       GIMM_CHECK(dims[a] > 0 && dims[a] <= 65536,
                  what << ": dimension " << a << " must be in [1, 65536], got " << dims[a]);
-      GIMM_CHECK(std::isfinite(spacing[a]) && spacing[a] > 0,
-                 what << ": spacing " << a << " must be finite and > 0, got " << spacing[a]);
-      GIMM_CHECK(std::isfinite(origin[a]), what << ": origin " << a << " is " << origin[a]);
+      // Bounds far beyond any scanner (0.1 um to 10 m voxels, 10 km from the origin): past them
+      // the cameras and rays built on the grid lose every digit and fail far from the cause.
+      GIMM_CHECK(std::isfinite(spacing[a]) && spacing[a] >= 1e-4 && spacing[a] <= 1e4,
+                 what << ": spacing " << a << " must be in [1e-4, 1e4] mm, got " << spacing[a]);
+      GIMM_CHECK(std::isfinite(origin[a]) && std::abs(origin[a]) <= 1e7,
+                 what << ": origin " << a << " must be within +-1e7 mm, got " << origin[a]);
     }
     GIMM_CHECK(direction.allFinite(), what << ": direction has non-finite entries");
     const double orthonormality =

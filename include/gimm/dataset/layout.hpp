@@ -57,14 +57,19 @@ inline std::pair<std::string, std::string> split_pair_id(const std::string& id) 
   return parts;
 }
 
-/// Refuses a patient id that is no single folder name ("", ".", "..", a '/', a '\\' or a NUL):
-/// an id read from a file ("../../etc" in a manifest) must not reach outside patients/.
+/// Refuses a `kind` name ("patient id", "view") that is no single file or folder name ("",
+/// ".", "..", a '/', a '\\' or a NUL): a name read from a file ("../../etc" in a manifest or a
+/// pair file) must not reach outside its folder.
+inline void check_plain_name(const char* kind, const std::string& name, const std::string& where) {
+  GIMM_CHECK_AS(FormatError,
+                !name.empty() && name != "." && name != ".." &&
+                    name.find_first_of(std::string("/\\\0", 3)) == std::string::npos,
+                where << ": " << kind << " '" << name
+                      << "' is not a folder name (no '/', '\\', '..' or empty id)");
+}
+
 inline void check_patient_name(const std::string& id, const std::string& where) {
-  GIMM_CHECK_AS(
-      FormatError,
-      !id.empty() && id != "." && id != ".." &&
-          id.find_first_of(std::string("/\\\0", 3)) == std::string::npos,
-      where << ": patient id '" << id << "' is not a folder name (no '/', '\\', '..' or empty id)");
+  check_plain_name("patient id", id, where);
 }
 
 class DatasetLayout {

@@ -128,6 +128,8 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
   try {
     t.view_a = j.at("view_a").get<std::string>();
     t.view_b = j.at("view_b").get<std::string>();
+    check_plain_name("view_a", t.view_a, where);  // "../../../x" reached outside views/
+    check_plain_name("view_b", t.view_b, where);
     // An id out of range, or a number that is not an integer (49e9), is refused: converting it
     // to int would be undefined (found by libFuzzer).
     const auto view_class_of = [&](const char* key) {
@@ -141,6 +143,9 @@ inline PairTruth pair_truth_from_json(const nlohmann::json& j, const std::string
     t.view_class_a = view_class_of("view_class_a");
     t.view_class_b = view_class_of("view_class_b");
     t.F = matrix_from_json<3, 3>(j, "F", where);
+    // All zeros passes as a matrix and turns every epipolar figure of the pair into null.
+    GIMM_CHECK_AS(FormatError, t.F.cwiseAbs().maxCoeff() > 0,
+                  where << ": 'F' is all zeros (no epipolar geometry)");
   } catch (const nlohmann::json::exception& e) {
     throw FormatError("gimm: " + where + ": " + e.what());
   }
@@ -309,6 +314,8 @@ class DatasetReader {
     }
     t.mask_a = mask(patient, t.view_a);
     t.mask_b = mask(patient, t.view_b);
+    check_labels_inside(t.dense, *t.mask_a, true, layout_.view_mask(patient, t.view_a), file);
+    check_labels_inside(t.dense, *t.mask_b, false, layout_.view_mask(patient, t.view_b), file);
     return t;
   }
 
@@ -320,6 +327,23 @@ class DatasetReader {
 
  private:
   std::string root_string() const { return layout_.root().string(); }
+
+  /// A mask of another size than its view (a 1 x 1 PNG) would score the labels against the
+  /// wrong pixels: every label of the pair must lie on its view's mask image.
+  static void check_labels_inside(const std::vector<Correspondence>& dense,
+                                  const Image<std::uint8_t>& mask, bool side_a,
+                                  const std::filesystem::path& mask_file,
+                                  const std::filesystem::path& pair_file) {
+    for (const Correspondence& c : dense) {
+      const Eigen::Vector2d& p = side_a ? c.a : c.b;
+      GIMM_CHECK_AS(
+          FormatError,
+          p.x() > -0.5 && p.y() > -0.5 && p.x() < mask.cols() - 0.5 && p.y() < mask.rows() - 0.5,
+          "'" << mask_file.string() << "' is " << mask.cols() << " x " << mask.rows()
+              << " px, but '" << pair_file.string() << "' labels (" << p.x() << ", " << p.y()
+              << ") in that view");
+    }
+  }
 
   std::shared_ptr<const Image<std::uint8_t>> mask(const std::string& patient,
                                                   const std::string& view) {

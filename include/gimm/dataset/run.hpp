@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -159,6 +160,36 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
 /// The shard manifests of `root` joined into one manifest (patients sorted by id, no "shard"),
 /// nothing written yet (stale run temporaries aside). They must all be of one run: the same
 /// parameters, input and shard count, every shard present once.
+namespace detail {
+/// The fields of a shard manifest that merge reads, with their types; patient records with a
+/// folder-name id and a known split. (nlohmann::json's own exceptions name no file: the caller
+/// adds it.)
+inline void check_shard_fields(const nlohmann::json& m, const std::string& where) {
+  GIMM_CHECK_AS(FormatError, m.contains("parameters") && m.contains("input"),
+                where << ": a shard manifest needs 'parameters' and 'input'");
+  const int count = m.at("shard").at("count").get<int>();
+  const int index = m.at("shard").at("index").get<int>();
+  GIMM_CHECK_AS(FormatError, count >= 1 && index >= 0 && index < count,
+                where << ": shard " << index << " of " << count << " is out of range");
+  const auto& list = m.at("patients");
+  GIMM_CHECK_AS(FormatError, list.is_array(),
+                where << ": 'patients' must be an array, got " << list.dump());
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    const auto& p = list[k];
+    const std::string at = where + ": 'patients'[" + std::to_string(k) + "]";
+    GIMM_CHECK_AS(FormatError, p.is_object() && p.contains("id") && p.at("id").is_string(),
+                  at << " must be an object with a string 'id', got " << p.dump());
+    check_patient_name(p.at("id").get<std::string>(), at);
+    if (p.contains("split")) {
+      const auto& split = p.at("split");
+      GIMM_CHECK_AS(FormatError,
+                    split.is_string() && (split == "train" || split == "val" || split == "test"),
+                    at << ": split must be train, val or test, got " << split.dump());
+    }
+  }
+}
+}  // namespace detail
+
 struct MergedShards {
   nlohmann::json manifest;
   std::size_t shards = 0;
@@ -181,9 +212,15 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
   nlohmann::json merged, patients = nlohmann::json::array();
   int count = -1;
   std::vector<int> seen;
+  std::map<std::string, std::pair<int, fs::path>> shard_of;  // patient id -> its shard, file
   for (const auto& path : shards) {
     const auto m = read_json_file(path);
     check_dataset_format(m, path.string());
+    try {
+      detail::check_shard_fields(m, path.string());
+    } catch (const nlohmann::json::exception& e) {
+      GIMM_FAIL("merge: '" << path.string() << "' is no shard manifest: " << e.what());
+    }
     if (merged.is_null()) merged = m;
     GIMM_CHECK(m.at("parameters") == merged.at("parameters") &&
                    m.at("input") == merged.at("input") && m.at("format") == merged.at("format"),
@@ -199,7 +236,14 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
     GIMM_CHECK(std::find(seen.begin(), seen.end(), index) == seen.end(),
                "merge: shard " << index << " appears twice in '" << root.string() << "'");
     seen.push_back(index);
-    for (const auto& p : m.at("patients")) patients.push_back(p);
+    for (const auto& p : m.at("patients")) {
+      const std::string id = p.at("id").get<std::string>();
+      const auto [it, fresh] = shard_of.emplace(id, std::pair{index, path});
+      GIMM_CHECK_AS(FormatError, fresh,
+                    "merge: patient '" << id << "' is in '" << it->second.second.string()
+                                       << "' and in '" << path.string() << "'");
+      patients.push_back(p);
+    }
   }
   std::sort(seen.begin(), seen.end());
   for (int i = 0; i < count; ++i)
@@ -209,6 +253,17 @@ inline MergedShards join_shards(const std::filesystem::path& root) {
   std::sort(patients.begin(), patients.end(), [](const auto& a, const auto& b) {
     return a["id"].template get<std::string>() < b["id"].template get<std::string>();
   });
+  // Patient k (in id order) is shard k mod N's: a patient lost from one shard's manifest, or
+  // one its shard did not make, shows as the first patient out of place.
+  for (std::size_t k = 0; k < patients.size(); ++k) {
+    const std::string id = patients[k]["id"].get<std::string>();
+    const auto& [index, path] = shard_of.at(id);
+    GIMM_CHECK_AS(FormatError, index == static_cast<int>(k % static_cast<std::size_t>(count)),
+                  "merge: patient '" << id << "' (number " << k << " in id order) belongs to shard "
+                                     << k % static_cast<std::size_t>(count) << " of " << count
+                                     << ", but '" << path.string() << "' (shard " << index
+                                     << ") lists it: a patient is missing or misplaced");
+  }
   merged["patients"] = patients;
   merged.erase("shard");
   return {merged, shards.size(), shards};

@@ -15,6 +15,7 @@
 ///   isocentre and z-component of t puts the virtual source plane at depth 0.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -63,6 +64,12 @@ class Camera {
                "Camera: K must be upper triangular with K(2,2) = 1, got K =\n"
                    << K);
     GIMM_CHECK(K(0, 0) != 0 && K(1, 1) != 0, "Camera: K has a zero focal entry");
+    // A C-arm's K is in pixels and t in mm, both far below 1e9; beyond that the products that
+    // follow (P, F, the centre) overflow or lose every digit.
+    const Scalar largest = std::max(K.cwiseAbs().maxCoeff(), t.cwiseAbs().maxCoeff());
+    GIMM_CHECK(largest <= Scalar(1e9), "Camera: K and t must lie within +-1e9 (pixels, mm), got "
+                                           << largest << " in K =\n"
+                                           << K << "\nt = " << t.transpose());
     const Scalar orthonormality = (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff();
     GIMM_CHECK(orthonormality < Scalar(1e-5) && R.determinant() > 0,
                "Camera: R must be a rotation (|R^T R - I| = " << orthonormality << ", det = "

@@ -49,6 +49,10 @@ inline const char* to_string(PatientPosition p) {
 }
 
 struct CArm {
+  static constexpr double kMaxDistanceMm = 1e4;  ///< SID, SOD, pixel pitch: at most 10 m
+  static constexpr double kMinPixelMm = 1e-3;    ///< 1 um
+  static constexpr double kMaxPositionMm = 1e5;  ///< isocentre, table: within 100 m
+  static constexpr double kMaxPrincipalPointPx = 1e6;
   double primary_deg = 0.0;    ///< +LAO / -RAO, degrees
   double secondary_deg = 0.0;  ///< +cranial / -caudal, degrees
   double sid_mm = 1000.0;      ///< source to detector
@@ -71,20 +75,37 @@ struct CArm {
                "CArm: primary angle must be in [-180, 180] degrees, got " << primary_deg);
     GIMM_CHECK(std::isfinite(secondary_deg) && std::abs(secondary_deg) < 90,
                "CArm: secondary angle must be in (-90, 90) degrees, got " << secondary_deg);
-    GIMM_CHECK(std::isfinite(sod_mm) && sod_mm > 0, "CArm: SOD must be > 0 mm, got " << sod_mm);
-    GIMM_CHECK(std::isfinite(sid_mm) && sid_mm > sod_mm,
-               "CArm: SID must exceed SOD (" << sod_mm << " mm), got " << sid_mm);
+    // Bounds far beyond any C-arm (10 m, 1 um pixels, 100 m of table) that keep the camera's K
+    // and t within Camera's 1e9, so a mistyped value is refused here, naming it.
+    GIMM_CHECK(std::isfinite(sod_mm) && sod_mm > 0 && sod_mm <= kMaxDistanceMm,
+               "CArm: SOD must be in (0, " << kMaxDistanceMm << "] mm, got " << sod_mm);
+    GIMM_CHECK(std::isfinite(sid_mm) && sid_mm > sod_mm && sid_mm <= kMaxDistanceMm,
+               "CArm: SID must exceed SOD (" << sod_mm << " mm) and be at most " << kMaxDistanceMm
+                                             << " mm, got " << sid_mm);
     GIMM_CHECK(rows > 0 && rows <= 16384 && cols > 0 && cols <= 16384,
                "CArm: detector size must be in [1, 16384], got " << rows << " x " << cols);
-    GIMM_CHECK(std::isfinite(pixel_mm) && pixel_mm > 0,
-               "CArm: pixel size must be > 0 mm, got " << pixel_mm);
-    GIMM_CHECK(std::isfinite(pixel_row_mm) && pixel_row_mm >= 0,
-               "CArm: row pixel size must be > 0 mm (0: square pixels), got " << pixel_row_mm);
-    GIMM_CHECK(isocenter.allFinite(), "CArm: isocentre must be finite");
-    GIMM_CHECK(table_mm.allFinite() && reference_table_mm.allFinite(),
-               "CArm: table positions must be finite");
+    GIMM_CHECK(std::isfinite(pixel_mm) && pixel_mm >= kMinPixelMm && pixel_mm <= kMaxDistanceMm,
+               "CArm: pixel size must be in [" << kMinPixelMm << ", " << kMaxDistanceMm
+                                               << "] mm, got " << pixel_mm);
+    GIMM_CHECK(
+        std::isfinite(pixel_row_mm) &&
+            (pixel_row_mm == 0 || (pixel_row_mm >= kMinPixelMm && pixel_row_mm <= kMaxDistanceMm)),
+        "CArm: row pixel size must be in [" << kMinPixelMm << ", " << kMaxDistanceMm
+                                            << "] mm (0: square pixels), got " << pixel_row_mm);
+    GIMM_CHECK(isocenter.allFinite() && isocenter.cwiseAbs().maxCoeff() <= kMaxPositionMm,
+               "CArm: isocentre must be finite and within +-" << kMaxPositionMm << " mm, got "
+                                                              << isocenter.transpose());
+    GIMM_CHECK(table_mm.allFinite() && reference_table_mm.allFinite() &&
+                   table_mm.cwiseAbs().maxCoeff() <= kMaxPositionMm &&
+                   reference_table_mm.cwiseAbs().maxCoeff() <= kMaxPositionMm,
+               "CArm: table positions must be finite and within +-"
+                   << kMaxPositionMm << " mm, got " << table_mm.transpose() << " (reference "
+                   << reference_table_mm.transpose() << ")");
     if (principal_point)
-      GIMM_CHECK(principal_point->allFinite(), "CArm: principal point must be finite");
+      GIMM_CHECK(principal_point->allFinite() &&
+                     principal_point->cwiseAbs().maxCoeff() <= kMaxPrincipalPointPx,
+                 "CArm: principal point must be finite and within +-"
+                     << kMaxPrincipalPointPx << " px, got " << principal_point->transpose());
   }
 
   Eigen::Vector2d principal_point_or_centre() const {

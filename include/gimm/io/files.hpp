@@ -39,6 +39,9 @@ namespace gimm {
 /// The whole file in one read (an istreambuf_iterator copy runs at ~300 MB/s; this at memory
 /// speed, which is most of the load time of a CT volume).
 inline std::vector<unsigned char> read_file_bytes(const std::filesystem::path& path) {
+  // fopen opens a folder on Linux and only the read fails ("error reading"): say what it is.
+  GIMM_CHECK_AS(IoError, !std::filesystem::is_directory(path),
+                "'" << path.string() << "' is a folder, not a file");
   std::FILE* f = std::fopen(path.c_str(), "rb");
   GIMM_CHECK_AS(IoError, f != nullptr,
                 "cannot open '" << path.string() << "': " << std::strerror(errno));
@@ -197,17 +200,27 @@ inline bool path_is_within(const std::filesystem::path& inner, const std::filesy
 
 /// Refuses a run that would write over what it reads: an output that is (or resolves to, or is
 /// a hard link of) one of the inputs, and, with `folders_contain`, an input inside an output
-/// folder (a dataset written over its own source volumes). Empty paths are not given ones.
+/// folder (a dataset written over its own source volumes); and two outputs that are one file
+/// (the second would replace the first). Empty paths are not given ones.
 inline void check_outputs_not_inputs(const std::vector<NamedPath>& outputs,
                                      const std::vector<NamedPath>& inputs,
                                      bool folders_contain = false) {
-  for (const auto& out : outputs) {
+  const auto same_file = [](const std::filesystem::path& a, const std::filesystem::path& b) {
+    std::error_code ec;
+    return resolved_path(a) == resolved_path(b) || std::filesystem::equivalent(a, b, ec);
+  };
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const auto& out = outputs[i];
     if (out.path.empty()) continue;
+    for (std::size_t j = i + 1; j < outputs.size(); ++j)
+      GIMM_CHECK(outputs[j].path.empty() || !same_file(out.path, outputs[j].path),
+                 out.name << " " << out.path.string() << " and " << outputs[j].name << " "
+                          << outputs[j].path.string()
+                          << " are one file: one output would replace the other; give each its "
+                             "own path");
     for (const auto& in : inputs) {
       if (in.path.empty()) continue;
-      std::error_code ec;
-      const bool same = resolved_path(out.path) == resolved_path(in.path) ||
-                        std::filesystem::equivalent(out.path, in.path, ec);
+      const bool same = same_file(out.path, in.path);
       GIMM_CHECK(!same, out.name << " " << out.path.string() << " is the input " << in.name << " "
                                  << in.path.string()
                                  << ": the run would overwrite what it reads; write elsewhere");

@@ -158,6 +158,18 @@ inline bool png_decode(PngIo& io, PngDecoded& out) {
   return true;
 }
 
+/// ", header W x H px (gimm reads up to 32768 a side)" from the IHDR chunk's own bytes (libpng
+/// refuses a bad size before it tells it), or "" when the file has no IHDR where it belongs.
+inline std::string png_header_size(const std::vector<unsigned char>& bytes) {
+  if (bytes.size() < 24 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) return {};
+  const auto be32 = [&](std::size_t at) {
+    return (std::uint32_t(bytes[at]) << 24) | (std::uint32_t(bytes[at + 1]) << 16) |
+           (std::uint32_t(bytes[at + 2]) << 8) | std::uint32_t(bytes[at + 3]);
+  };
+  return ", header " + std::to_string(be32(16)) + " x " + std::to_string(be32(20)) +
+         " px (gimm reads up to 32768 a side)";
+}
+
 inline PngDecoded read_png_any(const std::filesystem::path& path) {
   std::vector<unsigned char> bytes = read_file_bytes(path);
   GIMM_CHECK_AS(FormatError, bytes.size() >= 8 && png_sig_cmp(bytes.data(), 0, 8) == 0,
@@ -168,10 +180,7 @@ inline PngDecoded read_png_any(const std::filesystem::path& path) {
   PngDecoded out;
   GIMM_CHECK_AS(FormatError, png_decode(io, out),
                 "cannot decode PNG '" << path.string() << "' (" << bytes.size() << " bytes"
-                                      << (out.rows > 0 ? ", header " + std::to_string(out.rows) +
-                                                             " x " + std::to_string(out.cols)
-                                                       : std::string())
-                                      << "): " << io.error);
+                                      << png_header_size(bytes) << "): " << io.error);
   GIMM_CHECK_AS(FormatError, out.rows > 0 && out.cols > 0,
                 "'" << path.string() << "' is an empty image");
   return out;

@@ -4,6 +4,7 @@
 /// A folder (a DICOM series) or another extension is an error that names the formats gimm
 /// reads and how to convert.
 #include <filesystem>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,7 +52,23 @@ inline std::string volume_formats_help() {
 }
 
 template <class T>
+Volume<T> read_volume_as(const std::filesystem::path& path);
+
+/// The volume in `path` (format by the file name). Running out of memory for its voxels is an
+/// error naming the file, not a bare std::bad_alloc.
+template <class T>
 Volume<T> read_volume(const std::filesystem::path& path) {
+  try {
+    return read_volume_as<T>(path);
+  } catch (const std::bad_alloc&) {
+    GIMM_FAIL("'" << path.string() << "': not enough memory to read its voxels as " << sizeof(T)
+                  << "-byte values (its grid is larger than this process may "
+                  << "allocate: a memory limit, or a header with the wrong sizes?)");
+  }
+}
+
+template <class T>
+Volume<T> read_volume_as(const std::filesystem::path& path) {
   GIMM_CHECK(!std::filesystem::is_directory(path),
              "'" << path.string() << "' is a folder, not a volume file: " << volume_formats_help());
   const auto format = volume_format(path);

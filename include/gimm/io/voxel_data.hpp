@@ -100,8 +100,12 @@ inline std::filesystem::path detached_data_file(const std::filesystem::path& hea
   const std::filesystem::path resolved = file.is_absolute() ? file : header.parent_path() / file;
   std::error_code ec;
   const auto status = std::filesystem::status(resolved, ec);
-  GIMM_CHECK_AS(FormatError,
-                !std::filesystem::exists(status) || std::filesystem::is_regular_file(status),
+  GIMM_CHECK_AS(IoError, std::filesystem::exists(status),
+                "'" << what << "': " << field << " '" << name << "' ('" << resolved.string()
+                    << "') does not exist"
+                    << (ec && ec != std::errc::no_such_file_or_directory ? ": " + ec.message()
+                                                                         : std::string()));
+  GIMM_CHECK_AS(FormatError, std::filesystem::is_regular_file(status),
                 "'" << what << "': " << field << " '" << name << "' ('" << resolved.string()
                     << "') is not a regular file (a folder, device or pipe): gimm reads voxels "
                        "from files only");

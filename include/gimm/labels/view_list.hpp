@@ -78,6 +78,8 @@ inline std::vector<ListedPair> view_list_from_json(const nlohmann::json& doc,
                                                    const std::string& where) {
   GIMM_CHECK_AS(FormatError, doc.is_object(), where << ": must be a JSON object");
   detail::check_keys(doc, {"format", "pairs", "note"}, where);
+  GIMM_CHECK_AS(FormatError, !doc.contains("note") || doc.at("note").is_string(),
+                where << ": 'note' is free text, a string; got " << doc.at("note").dump());
   const std::string format = json_string(doc, "format", where);
   GIMM_CHECK_AS(FormatError, format == kViewListFormat,
                 where << ": 'format' must be '" << kViewListFormat << "', got '" << format << "'");
@@ -99,7 +101,8 @@ inline std::vector<ListedPair> view_list_from_json(const nlohmann::json& doc,
     pair.b = detail::listed_pose(json_field(p, "b", at), pair.system, at + ".b");
     const double separation = view_angle_between(pair.a.primary_deg, pair.a.secondary_deg,
                                                  pair.b.primary_deg, pair.b.secondary_deg);
-    GIMM_CHECK_AS(FormatError, separation >= kMinListedSeparationDeg,
+    // 1e-9 of slack: 30 and 31 degrees come out 0.99999999... apart in floating point.
+    GIMM_CHECK_AS(FormatError, separation >= kMinListedSeparationDeg - 1e-9,
                   at << ": views a and b are " << separation << " degrees apart; at least "
                      << kMinListedSeparationDeg << " is needed for an epipolar geometry");
     // A pair listed twice (in either order) would write one pair file twice and count it twice.

@@ -101,8 +101,10 @@ inline NetworkInput to_network_input(const Image<float>& image, int input_size,
   in.content_rows = content.rows();
   in.content_cols = content.cols();
   GIMM_CHECK(in.content_rows >= 8 && in.content_cols >= 8,
-             name << ": " << in.content_cols << "x" << in.content_rows
-                  << " is too small for the matcher (at least 8x8 pixels)");
+             name << ": " << image.cols() << "x" << image.rows() << " px resized to "
+                  << in.content_cols << "x" << in.content_rows << " (input size " << input_size
+                  << ") is too small for the matcher (at least 8x8 pixels; a very long, thin "
+                     "image?)");
   in.scale_u = double(image.cols()) / in.content_cols;
   in.scale_v = double(image.rows()) / in.content_rows;
   const std::int64_t rows = std::max<std::int64_t>(pad_rows, (in.content_rows + 7) / 8 * 8);

@@ -112,7 +112,11 @@ inline PairTruth read_user_truth(const std::filesystem::path& path, double radiu
     c.world = world[k];
     t.dense.push_back(c);
   }
-  if (j.contains("F")) t.F = matrix_from_json<3, 3>(j, "F", where);
+  if (j.contains("F")) {
+    t.F = matrix_from_json<3, 3>(j, "F", where);
+    GIMM_CHECK_AS(FormatError, t.F.cwiseAbs().maxCoeff() > 0,
+                  where << ": 'F' is all zeros (no epipolar geometry; leave it out instead)");
+  }
   t.mask_a = sparse_truth_mask(a, radius_px);
   t.mask_b = sparse_truth_mask(b, radius_px);
   return t;

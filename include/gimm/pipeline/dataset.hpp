@@ -196,7 +196,9 @@ inline std::string imagecas_patterns() {
 inline std::vector<PatientSource> scan_imagecas_folder(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
   GIMM_CHECK_AS(IoError, fs::is_directory(dir),
-                "input folder '" << dir.string() << "' does not exist");
+                "input folder '" << dir.string() << "' "
+                                 << (fs::exists(dir) ? "is a file, not a folder of patients"
+                                                     : "does not exist"));
   std::vector<PatientSource> out;
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator();
        ++it) {

@@ -60,11 +60,12 @@ struct DatasetRunSummary {
 namespace detail {
 /// --export reference needs ids the reference layout can name: checked before any work.
 inline void check_export_ids(const std::string& format, const std::vector<std::string>& ids) {
-  if (!format.empty()) reference_format::check_patient_ids(ids, "--export " + format);
+  if (!format.empty()) reference_format::check_patient_ids(ids, "the " + format + " export");
 }
 
 inline void check_export_views(const std::string& format, const nlohmann::json& parameters) {
-  if (!format.empty()) reference_format::check_views_exportable(parameters, "--export " + format);
+  if (!format.empty())
+    reference_format::check_views_exportable(parameters, "the " + format + " export");
 }
 
 }  // namespace detail
@@ -100,8 +101,8 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   namespace fs = std::filesystem;
   const Shard& shard = run.shard;
   GIMM_CHECK(!shard.sharded() || run.export_format.empty(),
-             "--export with --shard " << shard.index << "/" << shard.count
-                                      << ": export after `gimm-dataset merge --export`");
+             "an export (" << run.export_format << ") from shard " << shard.index << "/"
+                           << shard.count << ": export after merging the shards");
   {
     std::vector<std::string> ids;
     for (const auto& s : sources) ids.push_back(s.id);

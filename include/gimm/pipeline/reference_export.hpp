@@ -88,7 +88,7 @@ inline std::string patient_token(const std::string& id, const std::string& where
 inline void check_views_exportable(const nlohmann::json& parameters, const std::string& where) {
   const bool listed = parameters.is_object() && parameters.contains("view_mode") &&
                       parameters["view_mode"] == "listed";
-  GIMM_CHECK(!listed, where << ": a dataset made with --views (view_mode 'listed') cannot be "
+  GIMM_CHECK(!listed, where << ": a dataset made from a view list (view_mode 'listed') cannot be "
                                "exported: the released layout names each pair by two distinct "
                                "view classes, which listed views need not have");
 }

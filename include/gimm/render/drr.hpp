@@ -73,6 +73,10 @@ Image<float> render_line_integrals(const Volume<T>& mu, const Camerad& camera,
                                    const DrrOptions& options = {}) {
   const double step = options.step_mm > 0 ? options.step_mm : mu.spacing().minCoeff();
   GIMM_CHECK(std::isfinite(step), "render: step must be finite, got " << options.step_mm);
+  // More than 100 samples per voxel add nothing to a trilinear interpolant (1e-9 mm hung).
+  GIMM_CHECK(step >= mu.spacing().minCoeff() / 100,
+             "render: step " << step << " mm is below 1/100 of the smallest voxel spacing ("
+                             << mu.spacing().minCoeff() << " mm)");
   GIMM_CHECK(!options.empty_blocks || options.empty_blocks->fits(mu.nx(), mu.ny(), mu.nz()),
              "render: the empty-block grid was built for another volume than "
                  << mu.nx() << "x" << mu.ny() << "x" << mu.nz());
