@@ -258,6 +258,11 @@ int main(int argc, char** argv) {
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
+  bool keep_catheter = false;
+  app.add_flag("--keep-catheter", keep_catheter,
+               "geometric, segmenting: keep the chains that look like the catheter or a field "
+               "edge (long and straight, or leaving the field at an even calibre); by default "
+               "they are dropped before matching (docs/geometric-matcher.md)");
   app.add_option("--camera-error-deg", camera_error.deg,
                  "dataset mode: rotate each view's camera given to the matcher by this many "
                  "degrees about both axes across the view (random signs, --seed), images exact")
@@ -407,6 +412,7 @@ int main(int argc, char** argv) {
                                                                 {"--min-confidence", "geometric"},
                                                                 {"--segment", "geometric"},
                                                                 {"--exact-vesselness", "geometric"},
+                                                                {"--keep-catheter", "geometric"},
                                                                 {"--sigma", "oracle"},
                                                                 {"--max-points", "epipolar"},
                                                                 {"--gate", "learned"},
@@ -434,6 +440,10 @@ int main(int argc, char** argv) {
       GIMM_USAGE_CHECK((gate != "soft" && gate != "logit") || app.count("--delta") == 0,
                        "--delta is --gate hard's threshold, not --gate " << gate << "'s");
     }
+    GIMM_USAGE_CHECK(!keep_catheter || segment || dataset.empty(),
+                     "--keep-catheter is about segmented chains: with --dataset it needs "
+                     "--segment (without it the matcher uses the vessel masks)");
+    if (keep_catheter) geometric.catheter.min_length_mm = 0, geometric.catheter.field_edge_px = 0;
     GIMM_USAGE_CHECK(
         app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
         "--exact-vesselness changes the segmentation: with --dataset it needs --segment "

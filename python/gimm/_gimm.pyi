@@ -267,7 +267,8 @@ def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraL
                     exact_vesselness: bool = False,
                     min_confidence: Optional[float] = None,
                     field_a: Optional[np.ndarray] = None, field_b: Optional[np.ndarray] = None,
-                    detect_fields: Optional[bool] = None) -> Dict[str, Any]: ...
+                    detect_fields: Optional[bool] = None,
+                    keep_catheter: bool = False) -> Dict[str, Any]: ...
 def exposed_field(image: np.ndarray) -> np.ndarray: ...
 def match_baseline(truth: Mapping[str, Any], method: Literal["epipolar", "oracle"] = "epipolar",
                    *, sigma_px: float = 1.0, max_points: int = 300,

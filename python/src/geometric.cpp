@@ -36,7 +36,8 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
       [](const py::handle& image_a, const py::handle& image_b, const py::handle& camera_a,
          const py::handle& camera_b, const py::object& mask_a, const py::object& mask_b,
          double tolerance_px, bool exact_vesselness, const py::object& min_confidence,
-         const py::object& field_a, const py::object& field_b, const py::object& detect) {
+         const py::object& field_a, const py::object& field_b, const py::object& detect,
+         bool keep_catheter) {
         if (mask_a.is_none() != mask_b.is_none())
           throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
         const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
@@ -79,6 +80,7 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
         GeometricOptions o;
         o.epipolar_tolerance_px = tolerance_px;
         o.segmentation.vesselness.exact_derivatives = exact_vesselness;
+        if (keep_catheter) o.catheter.min_length_mm = 0, o.catheter.field_edge_px = 0;
         if (!min_confidence.is_none())  // whichever threshold the pair's mode uses
           o.min_confidence = o.min_confidence_segmented = min_confidence.cast<double>();
         // Working memory kept from call to call (about 25 MB at 512 px): a loop over pairs then
@@ -108,7 +110,8 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
       py::kw_only(), py::arg("mask_a") = py::none(), py::arg("mask_b") = py::none(),
       py::arg("tolerance_px") = 3.0, py::arg("exact_vesselness") = false,
       py::arg("min_confidence") = py::none(), py::arg("field_a") = py::none(),
-      py::arg("field_b") = py::none(), py::arg("detect_fields") = py::none(), R"doc(
+      py::arg("field_b") = py::none(), py::arg("detect_fields") = py::none(),
+      py::arg("keep_catheter") = false, R"doc(
 The training-free geometric matcher (docs/geometric-matcher.md), as gimm-match --method geometric
 does for one pair: vessels segmented from the images (or the masks given), 2D centerlines, and a
 dynamic programme along each centerline over the crossings of its epipolar lines, both ways.
@@ -124,6 +127,8 @@ field_a, field_b: the exposed fields (nonzero = exposed, each its image's size);
 are not matched. Not given: found in the images when detect_fields (the collimator's dark frame,
 match/field_of_view.hpp), else the whole image; detect_fields None (default): found when the
 images are segmented (as gimm-match does for one pair), not with masks (as gimm-match --dataset).
+keep_catheter: keep the segmented chains that look like the catheter (long and straight,
+match/catheter_cue.hpp), which are dropped by default (gimm-match --keep-catheter).
 Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the ranking: the margin
 times how well the match is placed), margin (N,) (the DP margin, what min_confidence
 thresholds), world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras,

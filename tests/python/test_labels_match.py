@@ -224,9 +224,13 @@ class Matching(unittest.TestCase):
             prefixes[1] + ".png", "--camera-a", prefixes[0] + ".camera.json", "--camera-b",
             prefixes[1] + ".camera.json", "--out", out, *extra)
         reference = gimm.read_matches(out)
-        mine = gimm.match_geometric(*images, *cameras, exact_vesselness=bool(extra))
+        mine = gimm.match_geometric(*images, *cameras,
+                                    exact_vesselness="--exact-vesselness" in extra,
+                                    keep_catheter="--keep-catheter" in extra)
         # 8 matches fast, 10 exact since the tree prior (29-30 before); on this pair most of them
         # join rib edges of the two views, so this compares the two front ends, not accuracy.
+        # The catheter cue drops the straight rib edges: fast and with the cue, none is left
+        # (so the fast kernels are compared with --keep-catheter), exact and with it, 5.
         self.assertGreaterEqual(len(reference["confidence"]), 5, extra)
         for key in ("points_a", "points_b", "confidence", "F"):
             np.testing.assert_allclose(mine[key], reference[key], rtol=1e-12, atol=1e-12,
@@ -241,24 +245,29 @@ class Matching(unittest.TestCase):
             self.assertLess(np.median(np.linalg.norm(reprojected - mine[key], axis=1)), 1.5)
 
     def test_geometric_same_matches_as_gimm_match(self):
-        self.geometric_same_as_gimm_match()
+        self.geometric_same_as_gimm_match("--keep-catheter")
 
     # The reference kernels in both. (gimm-match used to apply --exact-vesselness only with
     # --dataset: on one pair it ran the fast kernels, 29 matches against the module's 30.)
     def test_geometric_exact_vesselness_same_matches_as_gimm_match(self):
         self.geometric_same_as_gimm_match("--exact-vesselness")
 
+    def test_geometric_exact_vesselness_keep_catheter_same_matches_as_gimm_match(self):
+        self.geometric_same_as_gimm_match("--exact-vesselness", "--keep-catheter")
+
     def test_geometric_repeated_calls_agree(self):
         # The module keeps the matcher's working memory between calls: a pair matched again
         # after pairs of another size and mode gives what it gave the first time.
-        big = [carm(*VIEW_A, size=256), carm(*VIEW_B_NEAR, size=256)]  # segmented: 8 matches
+        # Segmented: 8 matches, on rib edges the catheter cue would drop (kept here).
+        big = [carm(*VIEW_A, size=256), carm(*VIEW_B_NEAR, size=256)]
         small = [carm(*VIEW_A), carm(*VIEW_B)]
         render = renderer()
         rendered = {id(c): render.render(c) for c in big + small}
 
         def match(cameras, masks=False):
             r = [rendered[id(c)] for c in cameras]
-            extra = dict(mask_a=r[0]["vessel_mask"], mask_b=r[1]["vessel_mask"]) if masks else {}
+            extra = (dict(mask_a=r[0]["vessel_mask"], mask_b=r[1]["vessel_mask"]) if masks else
+                     dict(keep_catheter=True))
             return gimm.match_geometric(r[0]["intensity"], r[1]["intensity"], *cameras, **extra)
 
         first = [match(big), match(small, masks=True)]

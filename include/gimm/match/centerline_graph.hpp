@@ -40,6 +40,14 @@ struct CenterlineGraph2d {
 
 namespace detail {
 
+/// Length of a chain along its points, in pixels.
+inline double chain_length_px(const Branch2d& chain) {
+  double length = 0;
+  for (std::size_t k = 1; k < chain.points.size(); ++k)
+    length += (chain.points[k] - chain.points[k - 1]).norm();
+  return length;
+}
+
 // The 8 neighbours in cyclic order N, NE, E, SE, S, SW, W, NW (row offset, col offset).
 constexpr std::array<std::array<int, 2>, 8> kRing = {
     {{-1, 0}, {-1, 1}, {0, 1}, {1, 1}, {1, 0}, {1, -1}, {0, -1}, {-1, -1}}};
