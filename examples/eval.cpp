@@ -261,6 +261,7 @@ int evaluate_user_truth(const std::vector<std::string>& truths,
     const gimm::PairTruth truth = gimm::read_user_truth(truths[n], radius);
     const gimm::PairMatches matches =
         gimm::matches_from_json(gimm::read_json_file(predictions[n]), predictions[n]);
+    gimm::check_same_pair(truth, truths[n], matches, predictions[n]);
     pairs.push_back(gimm::score_pair(truth, matches));
     gimm::SummaryBuilder one(top_k);
     one.add(pairs.back());

@@ -66,4 +66,20 @@ json.dump(labels, open(os.path.join(pair_dir, first_pair), "w"))
 run("gimm-eval", "--dataset", bad, "--predictions", os.path.join(TMP, "p_o0"), ok=False,
     contains="'F' is all zeros")
 
+# Own truth: a dataset pair's matches scored against the truth of another pair are refused,
+# naming both files; against their own pair's truth (named by "pair" or by the file's stem)
+# they are scored.
+preds = os.path.join(TMP, "p_o0")
+patient = sorted(os.listdir(preds))[0]
+first, second = sorted(f for f in os.listdir(os.path.join(preds, patient)))[:2]
+matches = os.path.join(preds, patient, first)
+own = os.path.join(TMP, first)  # named by its stem, as the matches' pair
+json.dump({"points_a": [[10, 10]], "points_b": [[12, 14]]}, open(own, "w"))
+run("gimm-eval", "--truth", own, "--matches", matches, "--out", os.path.join(TMP, "own_ok"))
+other = os.path.join(TMP, "other.json")
+json.dump({"pair": second[:-5], "points_a": [[10, 10]], "points_b": [[12, 14]]}, open(other, "w"))
+run("gimm-eval", "--truth", other, "--matches", matches, "--out", os.path.join(TMP, "own_bad"),
+    ok=False, contains=f"is the truth of pair '{second[:-5]}'")
+check(not os.path.exists(os.path.join(TMP, "own_bad")), "a refused pairing left its --out")
+
 h.finish("eval_test")

@@ -106,6 +106,15 @@ if not torch.cuda.is_available():
     assert gpu.returncode != 0 and "--device cuda" in out and "no CUDA GPU" in out, out
     assert not os.path.exists(os.path.join(TMP, "no_gpu", "checkpoint.pt"))
 
+# The config check refuses a key it does not know, as the C++ reader does (nn/matcher_file.hpp).
+from gimm_model import DEFAULT_CONFIG, validate_config  # noqa: E402
+try:
+    validate_config({**DEFAULT_CONFIG, "treshold": 0.3})
+    raise AssertionError("validate_config accepted the unknown key 'treshold'")
+except ValueError as e:
+    assert "unknown key 'treshold'" in str(e), e
+validate_config({**DEFAULT_CONFIG, "input_size": 256, "gate": {"mode": "hard"}})
+
 # On-the-fly pairs (rendered_pairs.py through the gimm module): trains, validates on the dataset's
 # val split, and two runs with one seed give the same weights.
 try:

@@ -209,6 +209,12 @@ TEST_CASE("Camera constructor rejects invalid K, R, size", "[geometry][camera]")
   badK = K;
   badK(0, 0) = 0;
   CHECK_THROWS_WITH(Camerad(P, badK, R, t, 10, 20), Contains("zero focal"));
+  Eigen::Matrix3d tinyK = Eigen::Matrix3d::Identity();
+  tinyK(0, 0) = 1e-12;
+  CHECK_THROWS_WITH(Camerad(P, tinyK, R, t, 10, 20),
+                    Contains("focal entries must be at least 1e-6") && Contains("1e-12"));
+  tinyK(0, 0) = 1e-6;  // the smallest accepted
+  CHECK_NOTHROW(Camerad(P, tinyK, R, t, 10, 20));
   // Finite but absurd: K = 1e308 failed much later ("share their centre"); now at the camera.
   badK = K;
   badK(0, 0) = 1e308;

@@ -101,6 +101,14 @@ TEST_CASE("NIfTI from memory equals the file read, gzipped or not, and names the
     CHECK((from_memory.origin() - from_file.origin()).norm() == 0);
     CHECK((from_memory.direction() - from_file.direction()).norm() == 0);
   }
+  // Compression is told by the bytes, not the name (docs/conventions.md): a plain file named
+  // .nii.gz and a gzipped one named .nii read as the same volume.
+  std::filesystem::copy_file(tmp_path("memory.nii"), tmp_path("plain.nii.gz"),
+                             std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::copy_file(tmp_path("memory.nii.gz"), tmp_path("packed.nii"),
+                             std::filesystem::copy_options::overwrite_existing);
+  CHECK(gimm::read_nifti<float>(tmp_path("plain.nii.gz")).storage() == v.storage());
+  CHECK(gimm::read_nifti<float>(tmp_path("packed.nii")).storage() == v.storage());
   std::vector<unsigned char> bytes = valid_file_bytes();
   bytes.resize(400);  // the header promises 60 int16 voxels after byte 352
   try {

@@ -119,3 +119,19 @@ TEST_CASE("Eval summary: an earlier run's summary.json is read or refused by key
                       Catch::Contains("bad_summary.json") && Catch::Contains(word));
   }
 }
+
+TEST_CASE("Own truth: a matches file naming another pair is refused", "[metrics]") {
+  gimm::PairTruth truth;
+  truth.id = "LCA_00-01";
+  gimm::PairMatches m;
+  for (const char* agreeing : {"", "LCA_00-01", "phantom-0003/LCA_00-01"}) {
+    m.pair = agreeing;
+    CHECK_NOTHROW(gimm::check_same_pair(truth, "t.json", m, "m.json"));
+  }
+  for (const char* other : {"LCA_00-02", "phantom-0003/LCA_00-011", "xLCA_00-01", "LCA_00"}) {
+    m.pair = other;
+    CHECK_THROWS_WITH(gimm::check_same_pair(truth, "t.json", m, "m.json"),
+                      Catch::Contains("m.json holds the matches of pair '" + std::string(other)) &&
+                          Catch::Contains("t.json is the truth of pair 'LCA_00-01'"));
+  }
+}

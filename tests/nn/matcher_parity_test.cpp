@@ -206,6 +206,13 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   CHECK_THROWS_WITH(with_gate(R"({"mode": "hard", "delta_px": 4, "snap": "yes"})"),
                     Catch::Contains("'snap' has the wrong type"));
   CHECK_THROWS_WITH(with_gate(R"("hard")"), Catch::Contains("'gate' must be an object"));
+  CHECK_THROWS_WITH(with_gate(R"({"mode": "hard", "delta": 4})"),
+                    Catch::Contains("unknown key 'gate.delta'"));
+  // A key the reader does not know (a typo, a newer writer's setting) is refused, not ignored.
+  meta["gimm_config"] = config.substr(0, config.rfind('}')) + ", \"treshold\": 0.3}";
+  gimm::nn::write_safetensors(dir + "/typo.safetensors", all, meta);
+  CHECK_THROWS_WITH(gimm::nn::load_matcher(dir + "/typo.safetensors"),
+                    Catch::Contains("unknown key 'treshold'"));
 
   meta["gimm_config"] = "{not json";
   gimm::nn::write_safetensors(dir + "/badjson.safetensors", all, meta);

@@ -43,6 +43,8 @@ DEFAULT_CONFIG = {
 
 # Keys a weights file written before they existed may lack, with the value that reproduces it.
 BACKWARD_DEFAULTS = {"anchor": False}
+# Keys set after training (export.py --input-size, record_gate.py), read by the C++ engine.
+OPTIONAL_KEYS = ("input_size", "gate")
 
 
 def validate_config(cfg):
@@ -51,6 +53,9 @@ def validate_config(cfg):
     for key in DEFAULT_CONFIG:
         if key not in cfg:
             raise ValueError(f"matcher config: missing key '{key}'")
+    for key in cfg:  # as the C++ reader (nn/matcher_file.hpp): an unknown key is refused
+        if key not in DEFAULT_CONFIG and key not in OPTIONAL_KEYS:
+            raise ValueError(f"matcher config: unknown key '{key}'")
     if cfg["format"] != FORMAT:
         raise ValueError(f"matcher config: format must be {FORMAT}, got {cfg['format']!r}")
     w = cfg["widths"]

@@ -64,6 +64,11 @@ class Camera {
                "Camera: K must be upper triangular with K(2,2) = 1, got K =\n"
                    << K);
     GIMM_CHECK(K(0, 0) != 0 && K(1, 1) != 0, "Camera: K has a zero focal entry");
+    // A focal entry (pixels per unit of depth-normalised length, or per mm orthographically)
+    // far below any detector's makes K's inverse, and every back-projected ray, meaningless.
+    GIMM_CHECK(std::abs(K(0, 0)) >= Scalar(1e-6) && std::abs(K(1, 1)) >= Scalar(1e-6),
+               "Camera: K's focal entries must be at least 1e-6 in size, got " << K(0, 0) << " and "
+                                                                               << K(1, 1));
     // A C-arm's K is in pixels and t in mm, both far below 1e9; beyond that the products that
     // follow (P, F, the centre) overflow or lose every digit.
     const Scalar largest = std::max(K.cwiseAbs().maxCoeff(), t.cwiseAbs().maxCoeff());

@@ -25,6 +25,7 @@
 #include "gimm/dataset/reader.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
+#include "gimm/match/matches.hpp"
 
 namespace gimm {
 
@@ -120,6 +121,25 @@ inline PairTruth read_user_truth(const std::filesystem::path& path, double radiu
   t.mask_a = sparse_truth_mask(a, radius_px);
   t.mask_b = sparse_truth_mask(b, radius_px);
   return t;
+}
+
+/// The rule pairing a truth with a matches file (gimm-eval --truth/--matches, in one order):
+/// a matches file that names its pair (gimm-match --dataset writes "<patient>/<pair>"; one pair
+/// matched alone names none) must name the truth's pair, its "pair" or else its file's stem,
+/// whole or after a "<patient>/". Scoring one pair's matches against another's truth gives
+/// figures that look like a bad matcher.
+inline void check_same_pair(const PairTruth& truth, const std::string& truth_file,
+                            const PairMatches& matches, const std::string& matches_file) {
+  const std::string& named = matches.pair;
+  const bool agrees =
+      named.empty() || named == truth.id ||
+      (named.size() > truth.id.size() &&
+       named.compare(named.size() - truth.id.size(), truth.id.size(), truth.id) == 0 &&
+       named[named.size() - truth.id.size() - 1] == '/');
+  GIMM_CHECK(agrees, matches_file << " holds the matches of pair '" << named << "', but "
+                                  << truth_file << " is the truth of pair '" << truth.id
+                                  << "': give the files in the same order, or set the truth's "
+                                     "\"pair\"");
 }
 
 }  // namespace gimm

@@ -4,6 +4,7 @@
 /// shape; a file with a missing or an extra tensor is refused, naming it.
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <type_traits>
 
@@ -48,6 +49,15 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   const auto format = config_value<std::string>(j, "format", where);
   GIMM_CHECK_AS(FormatError, format == kMatcherFormat,
                 where << ": config format is '" << format << "', expected " << kMatcherFormat);
+  // A key this reader does not know would be ignored: a newer writer's setting, or a typo.
+  static const std::set<std::string> known = {
+      "format", "widths",       "coarse_heads", "fine_heads",  "coarse_layers", "fine_layers",
+      "film",   "film_classes", "film_dim",     "temperature", "threshold",     "border",
+      "window", "anchor",       "input_size",   "gate"};
+  for (const auto& [key, value] : j.items())
+    GIMM_CHECK_AS(FormatError, known.count(key),
+                  where << ": unknown key '" << key << "' (this reader knows " << kMatcherFormat
+                        << "'s keys only)");
   nn::MatcherConfig c;
   const auto widths = config_value<std::vector<std::int64_t>>(j, "widths", where);
   GIMM_CHECK_AS(FormatError, widths.size() == 3,
@@ -75,6 +85,9 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
     const auto gate = config_value<nlohmann::json>(j, "gate", where);
     GIMM_CHECK_AS(FormatError, gate.is_object(),
                   where << ": 'gate' must be an object, got " << gate.dump());
+    for (const auto& [key, value] : gate.items())
+      GIMM_CHECK_AS(FormatError, key == "mode" || key == "delta_px" || key == "snap",
+                    where << ": unknown key 'gate." << key << "' (mode, delta_px, snap)");
     c.gate_mode = config_value<std::string>(gate, "mode", where + " gate");
     if (gate.contains("delta_px"))
       c.gate_delta_px = config_value<double>(gate, "delta_px", where + " gate");
