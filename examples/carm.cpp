@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_flag("--explain", explain,
                "--dicom: list every tag read (value, use) and every one missing, not the JSON");
+  gimm::cli::option_flags() = {{"DicomReadOptions::pitch_mm", "--pixel"}};
   return gimm::cli::run(app, argc, argv, [&] {
     if (!dicom.empty()) {
       for (const char* flag : {"--primary", "--secondary", "--sid", "--sod", "--rows", "--cols",

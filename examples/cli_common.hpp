@@ -324,6 +324,22 @@ inline void keep_freed_memory() {
 #endif
 }
 
+/// The library's messages name its options ("SplitOptions::allow_single"), a CLI's user knows
+/// its flags: each CLI lists which flag sets which option (set once in main, before run), and
+/// its messages show the flag beside the option.
+inline std::vector<std::pair<std::string, std::string>>& option_flags() {
+  static std::vector<std::pair<std::string, std::string>> table;
+  return table;
+}
+
+/// `text` with each option of option_flags() followed by " (flag)" where it first appears.
+inline std::string with_flags(std::string text) {
+  for (const auto& [option, flag] : option_flags())
+    if (const std::size_t at = text.find(option); at != std::string::npos)
+      text.insert(at + option.size(), " (" + flag + ")");
+  return text;
+}
+
 /// The command-line contract of every gimm CLI: parses `argv` into `app`, then runs `body`.
 /// - --help prints the help, --version prints "<name> <version>"; both exit 0 (stdout).
 /// - A usage error (unknown flag, missing or malformed value, failed check, non-finite float,
@@ -331,6 +347,7 @@ inline void keep_freed_memory() {
 /// - A UsageError thrown by `body` (flags that conflict, a value the library refuses) is one
 ///   too: exit 2.
 /// - Other gimm and std errors thrown by `body` print "error: ..." and exit 1.
+/// - Messages carry the flag beside each library option they name (option_flags()).
 template <class Body>
 int run(CLI::App& app, int argc, char** argv, Body&& body) {
   const std::string name = program_name(app, argc, argv);
@@ -358,7 +375,7 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
   try {
     return body();
   } catch (const UsageError& e) {
-    std::cerr << "error: " << e.what() << " (see " << name << " --help)\n";
+    std::cerr << "error: " << with_flags(e.what()) << " (see " << name << " --help)\n";
     return 2;
   } catch (const std::bad_alloc&) {
     // Readers name their file (read_volume); elsewhere the command line is what can be named.
@@ -368,7 +385,7 @@ int run(CLI::App& app, int argc, char** argv, Body&& body) {
     std::cerr << "\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "error: " << printable(e.what()) << "\n";
+    std::cerr << "error: " << with_flags(printable(e.what())) << "\n";
     return 1;
   }
 }

@@ -13,6 +13,8 @@
 // the patients it finished, which a rerun skips (pipeline/dataset_run.hpp).
 #include <cstdio>
 #include <filesystem>
+#include <memory>
+#include <string>
 
 #include "cli_common.hpp"
 #include "gimm/io/files.hpp"
@@ -132,9 +134,35 @@ int main(int argc, char** argv) {
       throw CLI::ValidationError("--phantom-size",
                                  "the size is a phantom's; with --input it is the volume's");
   });
+  gimm::cli::option_flags() = {{"SplitOptions::allow_single", "--allow-single-system"},
+                               {"DatasetOptions::phantom_tubes", "--vessels tubes"}};
+  // The run's messages as gimm-dataset's: its name first, the flags beside the options.
+  const auto reporter = [](bool quiet) {
+    auto line = std::make_shared<gimm::ProgressLine>(quiet);
+    return [line](gimm::RunMessage kind, const std::string& text) {
+      const std::string said = gimm::cli::with_flags(text);
+      switch (kind) {
+        case gimm::RunMessage::info:
+          line->log("gimm-dataset: " + said);
+          break;
+        case gimm::RunMessage::warning:
+          line->log("gimm-dataset: warning: " + said);
+          break;
+        case gimm::RunMessage::error:
+          line->log("error: gimm-dataset: " + said);
+          break;
+        case gimm::RunMessage::progress:
+          line->show("gimm-dataset: " + said);
+          break;
+        case gimm::RunMessage::end:
+          line->finish();
+          break;
+      }
+    };
+  };
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {
-      const gimm::MergedShards merged = gimm::merge_dataset(out, export_format);
+      const gimm::MergedShards merged = gimm::merge_dataset(out, export_format, reporter(false));
       std::printf("gimm-dataset merge: %zu shards, %zu patients -> %s\n", merged.shards,
                   merged.manifest.at("patients").size(),
                   gimm::DatasetLayout(out).manifest().c_str());
@@ -193,6 +221,7 @@ int main(int argc, char** argv) {
                                  << " with --views: the reference layout names each pair by two "
                                     "distinct view classes, which a listed run does not keep");
     run.quiet = quiet;
+    run.report = reporter(quiet);
     run.timings_file = timings_file;
     run.export_format = export_format;
     run.input = input.empty()

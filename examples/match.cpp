@@ -375,6 +375,7 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
   app.add_option("--picture", picture, "PNG of the two views with the matches drawn");
 
+  gimm::cli::option_flags() = {{"DicomReadOptions::pitch_mm", "--pixel-a, --pixel-b"}};
   return gimm::cli::run(app, argc, argv, [&] {
     gimm::cli::keep_freed_memory();
     gimm::cli::refuse_outputs_over_inputs(

@@ -269,7 +269,7 @@ TEST_CASE("Patient steps: --vessels tubes images and labels the phantom's own tu
   // A CT patient has no analytic tubes: named, not guessed.
   PatientVolumes ct{patient.hu, patient.label, std::nullopt, std::nullopt};
   CHECK_THROWS_WITH(system_tubes(ct, CoronarySystem::LCA, "ct7", surface),
-                    Catch::Contains("patient ct7") && Catch::Contains("needs a phantom patient"));
+                    Catch::Contains("patient ct7") && Catch::Contains("need a phantom patient"));
 }
 
 TEST_CASE("Patient steps: the small records", "[pipeline][patient_steps]") {

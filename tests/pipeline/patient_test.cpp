@@ -2,12 +2,14 @@
 // (and warned about past the threshold), a single-tree label fails naming the flag or, with
 // allow_single_system, makes the present system only; timings go to the caller, never to
 // done.json.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <set>
 
 #include "gimm/io/nifti.hpp"
 #include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/dataset_run.hpp"
 #include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;
@@ -100,14 +102,14 @@ TEST_CASE("Patient: voxels the split drops are recorded and warned about", "[pip
   CHECK(dropped_voxels_warning(record, o).empty());
 }
 
-TEST_CASE("Patient: a single-tree label fails naming the flag, or makes that system only",
+TEST_CASE("Patient: a single-tree label fails naming the option, or makes that system only",
           "[pipeline][patient]") {
   const CoronarySplit split = split_coronary_systems(phantom().label);
   const PatientSource src = write_patient("12", split.lca);
   DatasetOptions o = small_views();
   CHECK_THROWS_WITH(
       generate_patient(src, o, fresh_out("single_refused")),
-      Catch::Contains("patient 12 label") && Catch::Contains("--allow-single-system"));
+      Catch::Contains("patient 12 label") && Catch::Contains("SplitOptions::allow_single"));
 
   o.allow_single_system = true;
   const fs::path out = fresh_out("single");
@@ -170,4 +172,41 @@ TEST_CASE("Patient: stage timings go to the caller, never into the dataset",
   for (const char* stage : {"read ", "split ", "centerlines ", "attenuation ", "mesh ", "views ",
                             "pairs ", "writes ", "s per view"})
     CHECK(line.find(stage) != std::string::npos);
+}
+
+TEST_CASE("Dataset run: messages go to the caller's reporter, in the library's words",
+          "[pipeline][patient]") {
+  // Two patients: one made, one whose label splits into one tree only (it fails). Every message
+  // reaches the reporter, none names a program or a flag, and the run ends once.
+  const CoronarySplit split = split_coronary_systems(phantom().label);
+  std::vector<PatientSource> sources = {write_patient("21", phantom().label),
+                                        write_patient("22", split.lca)};
+  std::vector<std::pair<RunMessage, std::string>> said;
+  DatasetRunOptions run;
+  run.report = [&](RunMessage kind, const std::string& text) { said.emplace_back(kind, text); };
+  const DatasetRunSummary s = run_dataset(sources, small_views(), fresh_out("reporter"), run);
+  CHECK(s.failed == 1);
+  const auto count = [&](RunMessage kind, const std::string& part) {
+    return std::count_if(said.begin(), said.end(), [&](const auto& m) {
+      return m.first == kind && m.second.find(part) != std::string::npos;
+    });
+  };
+  CHECK(count(RunMessage::info, "patient 21: ") == 1);
+  CHECK(count(RunMessage::error, "patient 22 failed: ") == 1);
+  CHECK(count(RunMessage::error, "SplitOptions::allow_single") == 1);
+  CHECK(count(RunMessage::progress, "2/2 patients (0 resumed, 1 failed)") == 1);
+  REQUIRE(!said.empty());
+  CHECK(said.back().first == RunMessage::end);
+  for (const auto& [kind, text] : said) {
+    INFO(text);
+    CHECK(text.find("gimm-") == std::string::npos);
+    CHECK(text.find("--") == std::string::npos);
+  }
+  // quiet: the failure still, no per-patient lines and no progress.
+  said.clear();
+  run.quiet = true;
+  (void)run_dataset(sources, small_views(), fresh_out("reporter_quiet"), run);
+  CHECK(count(RunMessage::info, "patient 21: ") == 0);
+  CHECK(count(RunMessage::progress, "") == 0);
+  CHECK(count(RunMessage::error, "patient 22 failed: ") == 1);
 }

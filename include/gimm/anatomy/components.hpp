@@ -105,8 +105,8 @@ CoronarySplit split_coronary_systems(const Volume<T>& label, const SplitOptions&
                                 << options.min_voxels << " voxels)");
   GIMM_CHECK(ids.size() >= 2 || options.allow_single,
              name << ": only one coronary component of at least " << options.min_voxels
-                  << " voxels; LCA/RCA cannot be split (to accept it as a single system, pass "
-                     "--allow-single-system to gimm-dataset, or set allow_single in SplitOptions)");
+                  << " voxels; LCA/RCA cannot be split (to accept it as a single system, set "
+                     "SplitOptions::allow_single)");
 
   // Centroid x (world) of each candidate.
   auto centroid_x = [&](int id) {

@@ -141,10 +141,9 @@ inline nlohmann::json finished_patient(const DatasetLayout& layout, const std::s
   const nlohmann::json stored = record.at("run");
   record.erase("run");
   const std::string difference = first_json_difference(stored, run);
-  GIMM_CHECK(difference.empty(), "gimm-dataset: '"
-                                     << dir.string() << "' was made with other parameters ("
-                                     << difference << "); use another --out, or the parameters "
-                                     << "it was made with");
+  GIMM_CHECK(difference.empty(), "'" << dir.string() << "' was made with other parameters ("
+                                     << difference << "); make this run into another folder, or "
+                                     << "with the parameters it was made with");
   // It goes into the manifest as it is: the record must be this patient's, and finished.
   GIMM_CHECK_AS(
       FormatError,

@@ -95,7 +95,7 @@ inline std::size_t tree_count(const nlohmann::json& j, const char* key, const st
 
 inline TreeFile tree_file_from_json(const nlohmann::json& j, const std::string& where) {
   GIMM_CHECK_AS(FormatError, j.is_object() && j.contains("format") && j.at("format").is_string(),
-                where << ": not a " << kTreeFormat << " file (gimm-match --tree): no 'format'");
+                where << ": not a " << kTreeFormat << " file (a reconstructed tree): no 'format'");
   GIMM_CHECK_AS(
       FormatError, j.at("format") == kTreeFormat,
       where << ": format " << j.at("format").dump() << ", gimm reads \"" << kTreeFormat << "\"");

@@ -244,8 +244,9 @@ inline EvalSummaryFile read_eval_summary(const std::filesystem::path& file,
                                          const std::string& default_method = "") {
   const nlohmann::json j = read_json_file(file);
   const std::string where = file.string();
-  GIMM_CHECK_AS(FormatError, j.is_object() && j.contains("format") && j.at("format") == kEvalFormat,
-                where << ": not a " << kEvalFormat << " summary (gimm-eval --out)");
+  GIMM_CHECK_AS(
+      FormatError, j.is_object() && j.contains("format") && j.at("format") == kEvalFormat,
+      where << ": not a " << kEvalFormat << " summary (the summary.json an evaluation writes)");
   GIMM_CHECK_AS(FormatError,
                 j.contains("top_k") && j.at("top_k").is_number_integer() &&
                     j.at("top_k").get<std::int64_t>() >= 0,

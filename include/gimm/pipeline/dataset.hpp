@@ -411,8 +411,9 @@ inline CenterlineTree system_tubes(const PatientVolumes& patient, CoronarySystem
                                    const std::string& id,
                                    std::shared_ptr<const VesselSurface>& surface) {
   GIMM_CHECK(patient.tubes, "patient " << id
-                                       << ": --vessels tubes needs a phantom patient (its analytic "
-                                          "tree); a CT's vessels are its label (voxel or mesh)");
+                                       << ": tube vessels (DatasetOptions::phantom_tubes) need a "
+                                          "phantom patient (its analytic tree); a CT's vessels "
+                                          "are its label (voxel or mesh)");
   CenterlineTree tree;
   std::vector<int> index(patient.tubes->branches.size(), -1);
   for (std::size_t b = 0; b < patient.tubes->branches.size(); ++b) {

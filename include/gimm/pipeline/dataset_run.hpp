@@ -27,6 +27,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -40,8 +42,42 @@
 
 namespace gimm {
 
+/// What a run says as it goes, for its caller to show: a line of its own (info: a patient
+/// made, the export written; warning; error: a patient failed), the run's state (progress:
+/// patients done, rate, ETA), and end (the last state was given). The library says what
+/// happened; the caller chooses where it goes and how it reads (gimm-dataset prefixes its name
+/// and keeps one progress line).
+enum class RunMessage { info, warning, error, progress, end };
+using RunReporter = std::function<void(RunMessage, const std::string&)>;
+
+/// The reporter when the caller gives none: lines on stderr ("warning: ...", "error: ..."),
+/// the state on one line (a terminal) or every 30 s (a log).
+inline RunReporter stderr_reporter(bool quiet) {
+  auto line = std::make_shared<ProgressLine>(quiet);
+  return [line](RunMessage kind, const std::string& text) {
+    switch (kind) {
+      case RunMessage::info:
+        line->log(text);
+        break;
+      case RunMessage::warning:
+        line->log("warning: " + text);
+        break;
+      case RunMessage::error:
+        line->log("error: " + text);
+        break;
+      case RunMessage::progress:
+        line->show(text);
+        break;
+      case RunMessage::end:
+        line->finish();
+        break;
+    }
+  };
+}
+
 struct DatasetRunOptions {
   Shard shard;
+  RunReporter report;         ///< where messages go; empty: stderr_reporter(quiet)
   bool quiet = false;         ///< no progress line, no per-patient lines
   std::string export_format;  ///< "" or "reference" (OUT/reference; not with shards)
   nlohmann::json input;       ///< what the patients came from, for the manifest
@@ -75,7 +111,8 @@ inline void check_export_views(const std::string& format, const nlohmann::json& 
 /// written to temporaries and a staging folder and renamed into place together, the manifest
 /// last; on a failure those already there are left as they were.
 inline void write_run_files(const std::filesystem::path& out, const nlohmann::json& manifest,
-                            const Shard& shard, const std::string& export_format) {
+                            const Shard& shard, const std::string& export_format,
+                            const RunReporter& report) {
   const DatasetWriter writer(out);
   const DatasetLayout& layout = writer.layout();
   StagedFiles files;
@@ -87,8 +124,7 @@ inline void write_run_files(const std::filesystem::path& out, const nlohmann::js
     reference->commit();
   }
   files.commit();
-  if (reference)
-    std::printf("gimm-dataset: reference layout -> %s\n", layout.reference_dir().c_str());
+  if (reference) report(RunMessage::info, "reference layout -> " + layout.reference_dir().string());
 }
 
 /// Makes the patients of `run.shard` among `sources` into `out` (see the file comment). A
@@ -144,7 +180,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   DatasetRunSummary summary;
   nlohmann::json patients = nlohmann::json::array();
   const auto t0 = std::chrono::steady_clock::now();
-  ProgressLine progress(run.quiet);
+  const RunReporter report = run.report ? run.report : stderr_reporter(run.quiet);
   std::size_t done = 0;
   for (std::size_t m = 0; m < mine.size(); ++m) {
     const PatientSource* src = mine[m];
@@ -157,7 +193,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
         PatientTimings t;
         record = generate_patient(*src, options, out, &t);
         summary.made += t;
-        if (!run.quiet) progress.log("gimm-dataset: patient " + src->id + ": " + t.summary());
+        if (!run.quiet) report(RunMessage::info, "patient " + src->id + ": " + t.summary());
         if (timings.is_open()) {
           nlohmann::json line = t.to_json();
           line["id"] = src->id;
@@ -166,18 +202,19 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
                         "cannot write the timings file '" << run.timings_file.string() << "'");
         }
         const std::string warning = dropped_voxels_warning(record, options);
-        if (!warning.empty()) progress.log("gimm-dataset: warning: " + warning);
+        if (!warning.empty()) report(RunMessage::warning, warning);
       } catch (const WriteError&) {
         // Every later write would fail the same way: recording this patient as failed would put
         // a full disk into the manifest. Stop; the error names the file and the reason.
-        progress.log("gimm-dataset: patient " + src->id +
-                     " not made: its files cannot be written; stopping (patients finished so far "
-                     "are kept, and a rerun resumes after them)");
+        report(RunMessage::info, "patient " + src->id +
+                                     " not made: its files cannot be written; stopping (patients "
+                                     "finished so far are kept, and a rerun resumes after them)");
+        report(RunMessage::end, "");
         throw;
       } catch (const std::exception& e) {
         record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
         ++summary.failed;
-        progress.log("error: gimm-dataset: patient " + src->id + " failed: " + e.what());
+        report(RunMessage::error, "patient " + src->id + " failed: " + e.what());
       }
     }
     patients.push_back(record);
@@ -190,19 +227,18 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     if (made > 0) eta = std::to_string(std::llround((mine.size() - done) / rate)) + " s";
     char line[200];
     std::snprintf(line, sizeof line,
-                  "gimm-dataset: %zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, "
-                  "ETA %s   ",
-                  done, mine.size(), summary.resumed, summary.failed, rate, eta.c_str());
-    progress.show(line);
+                  "%zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, ETA %s   ", done,
+                  mine.size(), summary.resumed, summary.failed, rate, eta.c_str());
+    if (!run.quiet) report(RunMessage::progress, line);
   }
-  progress.finish();
+  report(RunMessage::end, "");
   nlohmann::json manifest = {{"format", kDatasetFormat},
                              {"images", dataset_images(options.form_angiogram)},
                              {"parameters", options.to_json()},
                              {"input", run.input},
                              {"patients", patients}};
   if (shard.sharded()) manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
-  write_run_files(out, manifest, shard, run.export_format);
+  write_run_files(out, manifest, shard, run.export_format, report);
   folders.keep();
   summary.patients = patients.size();
   summary.manifest = layout.manifest(shard);
@@ -221,14 +257,15 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
 /// split lists and the export together (write_run_files), and only then removes the shard
 /// manifests: a merge that fails leaves `out` as it was.
 inline MergedShards merge_dataset(const std::filesystem::path& out,
-                                  const std::string& export_format) {
+                                  const std::string& export_format,
+                                  const RunReporter& report = stderr_reporter(false)) {
   MergedShards merged = join_shards(out);
   std::vector<std::string> ok_ids;
   for (const auto& p : merged.manifest.at("patients"))
     if (p.value("status", "") == "ok") ok_ids.push_back(p["id"].get<std::string>());
   detail::check_export_ids(export_format, ok_ids);
   detail::check_export_views(export_format, merged.manifest.value("parameters", nlohmann::json{}));
-  write_run_files(out, merged.manifest, Shard{}, export_format);
+  write_run_files(out, merged.manifest, Shard{}, export_format, report);
   for (const auto& path : merged.shard_files) std::filesystem::remove(path);
   return merged;
 }
