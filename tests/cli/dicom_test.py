@@ -52,6 +52,20 @@ for needle in ("(0018,1510) PositionerPrimaryAngle = -30", "(300A,0129) TableTop
                "(0018,1162) IntensifierSize = absent"):
     check(needle in explain, f"--explain lacks {needle!r}:\n{explain}")
 
+# A file with no pitch at all (ImagerPixelSpacing removed by GDCM's gdcmanon): refused naming
+# the library's option and the CLI's flag beside it; the flag then reads it.
+nopitch = T("nopitch.dcm")
+if shutil.which("gdcmanon"):
+    run_anon = __import__("subprocess").run(["gdcmanon", "--dumb", "--remove", "0018,1164",
+                                             T("a.dcm"), nopitch], capture_output=True)
+    check(run_anon.returncode == 0 and os.path.exists(nopitch), f"gdcmanon: {run_anon.stderr}")
+    run("gimm-carm", "--dicom", nopitch, ok=False,
+        contains="give the detector pixel pitch: DicomReadOptions::pitch_mm (--pixel), in mm")
+    run("gimm-carm", "--dicom", nopitch, "--pixel", 1.0)
+    run("gimm-match", "--dicom-a", nopitch, "--dicom-b", T("b.dcm"), "--method", "geometric",
+        "--out", T("nopitch.json"), ok=False, contains="(--pixel-a, --pixel-b)")
+    check(not os.path.exists(T("nopitch.json")), "a refused pair left its --out")
+
 # Matching from the DICOM files: classes from the angles, exact F written, tree, picture.
 for method in ("geometric", "learned"):
     outs = {k: T(f"{method}.{k}") for k in ("json", "tree.json", "png")}

@@ -986,8 +986,8 @@ inline XaFrame read_xa_dicom(const std::string& path, const DicomReadOptions& op
     col_pitch = (*imager)[1];
   } else {
     GIMM_CHECK(intensifier, path << ": neither (0018,1164) ImagerPixelSpacing nor (0018,1162) "
-                                    "IntensifierSize is present; give the detector pixel pitch "
-                                    "(DicomReadOptions::pitch_mm, mm)");
+                                    "IntensifierSize is present; give the detector pixel pitch: "
+                                    "DicomReadOptions::pitch_mm, in mm");
     row_pitch = col_pitch = intensifier->front() / double(cols);
     // The other candidate, FieldOfViewDimensions / Columns, is reported, not used: on eight real
     // GE DL views (0.400 vs 0.3906 mm) the IntensifierSize rule fit at least as well.
