@@ -143,7 +143,7 @@ struct GeometricOptions {
   /// When a view was segmented, its chains that look like the catheter or a field edge are
   /// dropped before matching (catheter_cue.hpp; off: min_length_mm and field_edge_px 0). On the
   /// clinical-style tuning set (6 patients, seed 11) it took the share of matches off the tree from
-  /// 0.53 to 0.28 and coverage at K = 20 from 0.25 to 0.39 (docs/geometric-matcher.md).
+  /// 0.53 to 0.31 and coverage at K = 20 from 0.25 to 0.38 (docs/geometric-matcher.md).
   CatheterCueOptions catheter;
   bool use_masks = true;  ///< dataset masks when the pair has them; else segment the images
   SegmentationOptions segmentation;  ///< scales are replaced by vessel_scales() of the cameras
