@@ -273,8 +273,10 @@ inline const CLI::Validator NotEmptyPath(
     },
     "", "NotEmptyPath");
 
-/// The output flags of gimm's CLIs (files, prefixes or folders).
-inline bool is_output_flag(const std::string& name) {
+/// The path flags that an empty value would turn into hidden files or nothing: the CLIs'
+/// outputs (files, prefixes or folders), and --tree, an output of gimm-match and an input of
+/// gimm-eval (an empty input path is refused the same way).
+inline bool is_path_flag(const std::string& name) {
   for (const char* flag : {"--out", "--picture", "--tree", "--tree-vtk", "--timings"})
     if (name == flag) return true;
   return false;
@@ -294,7 +296,7 @@ inline void check_numbers(CLI::App& app) {
   for (CLI::Option* option : app.get_options()) {
     const std::string type = base_type_name(*option);
     if (type == "FLOAT" || type == "UINT" || type == "INT") option->check(NotEmpty);
-    if (is_output_flag(option->get_name())) option->check(NotEmptyPath);
+    if (is_path_flag(option->get_name())) option->check(NotEmptyPath);
     if (type == "FLOAT")
       option->check(Finite);
     else if (type == "UINT" || type == "INT")
