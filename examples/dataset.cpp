@@ -13,7 +13,6 @@
 // the patients it finished, which a rerun skips (pipeline/dataset_run.hpp).
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 #include <string>
 
 #include "cli_common.hpp"
@@ -138,27 +137,9 @@ int main(int argc, char** argv) {
                                {"DatasetOptions::phantom_tubes", "--vessels tubes"}};
   // The run's messages as gimm-dataset's: its name first, the flags beside the options.
   const auto reporter = [](bool quiet) {
-    auto line = std::make_shared<gimm::ProgressLine>(quiet);
-    return [line](gimm::RunMessage kind, const std::string& text) {
-      const std::string said = gimm::cli::with_flags(text);
-      switch (kind) {
-        case gimm::RunMessage::info:
-          line->log("gimm-dataset: " + said);
-          break;
-        case gimm::RunMessage::warning:
-          line->log("gimm-dataset: warning: " + said);
-          break;
-        case gimm::RunMessage::error:
-          line->log("error: gimm-dataset: " + said);
-          break;
-        case gimm::RunMessage::progress:
-          line->show("gimm-dataset: " + said);
-          break;
-        case gimm::RunMessage::end:
-          line->finish();
-          break;
-      }
-    };
+    return gimm::stderr_reporter(quiet, "gimm-dataset: ", [](const std::string& text) {
+      return gimm::cli::with_flags(text);
+    });
   };
   return gimm::cli::run(app, argc, argv, [&] {
     if (*merge_cmd) {

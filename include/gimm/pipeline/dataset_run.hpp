@@ -50,23 +50,26 @@ namespace gimm {
 enum class RunMessage { info, warning, error, progress, end };
 using RunReporter = std::function<void(RunMessage, const std::string&)>;
 
-/// The reporter when the caller gives none: lines on stderr ("warning: ...", "error: ..."),
-/// the state on one line (a terminal) or every 30 s (a log).
-inline RunReporter stderr_reporter(bool quiet) {
+/// A reporter to stderr: lines of their own ("warning: ...", "error: ..."), the state on one
+/// line (a terminal) or every 30 s (a log). A program puts its name in `prefix` and may reword
+/// each message (`words`: e.g. show its flags beside the options named).
+inline RunReporter stderr_reporter(bool quiet, const std::string& prefix = "",
+                                   std::function<std::string(const std::string&)> words = {}) {
   auto line = std::make_shared<ProgressLine>(quiet);
-  return [line](RunMessage kind, const std::string& text) {
+  return [line, prefix, words](RunMessage kind, const std::string& text) {
+    const std::string said = words ? words(text) : text;
     switch (kind) {
       case RunMessage::info:
-        line->log(text);
+        line->log(prefix + said);
         break;
       case RunMessage::warning:
-        line->log("warning: " + text);
+        line->log(prefix + "warning: " + said);
         break;
       case RunMessage::error:
-        line->log("error: " + text);
+        line->log("error: " + prefix + said);
         break;
       case RunMessage::progress:
-        line->show(text);
+        line->show(prefix + said);
         break;
       case RunMessage::end:
         line->finish();
