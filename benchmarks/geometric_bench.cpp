@@ -40,6 +40,8 @@ bool load(LoadedPair& p, std::string& why) {
   p.input.image_a = &p.a;
   p.input.image_b = &p.b;
   p.input.truth = &p.truth;
+  p.input.mask_a = p.truth.mask_a.get();
+  p.input.mask_b = p.truth.mask_b.get();
   p.input.camera_a = reader.camera(patient, p.truth.view_a);
   p.input.camera_b = reader.camera(patient, p.truth.view_b);
   return true;

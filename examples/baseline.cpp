@@ -5,13 +5,13 @@
 // oracle: the dense GT labels with N(0, sigma^2) pixel noise on the B side; epipolar: vessel
 // pixels of A matched to the nearest vessel crossing of the exact epipolar line in B
 // (include/gimm/match/baselines.hpp). One file per pair: PRED_DIR/<patient>/<pair>.json, all or
-// nothing: a failed run (a full disk) leaves PRED_DIR as it was.
+// nothing: a failed run (a full disk) leaves PRED_DIR as it was (pipeline/match_run.hpp).
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
 #include "cli_common.hpp"
 #include "gimm/match/baselines.hpp"
+#include "gimm/pipeline/match_run.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"gimm-baseline: oracle and exact-epipolar baseline matches for gimm-eval",
@@ -48,25 +48,14 @@ int main(int argc, char** argv) {
       matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
     else
       matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
-    gimm::DatasetReader reader(dataset);
-    const auto ids = reader.pair_ids(split);
-    GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
-    std::size_t matches = 0;
-    // All or nothing: written under a staging folder and moved into PRED_DIR at the end, so a
-    // failure (a full disk) leaves PRED_DIR as it was.
-    gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
-      for (const auto& id : ids) {
-        const gimm::PairTruth truth = reader.pair(id);
-        gimm::PairInput input;
-        input.id = id;
-        input.truth = &truth;
-        const gimm::PairMatches m = matcher->match(input);
-        matches += m.size();
-        gimm::write_matches(gimm::matches_path(staged, id), m);
-      }
-    });
-    std::printf("gimm-baseline %s: %zu pairs, %zu matches -> %s\n", method.c_str(), ids.size(),
-                matches, out.c_str());
+    // The baselines read the labels only: no cameras, no images or fields.
+    gimm::MatchRunOptions run;
+    run.split = split;
+    run.use_cameras = false;
+    run.images = gimm::DatasetImages::rendered;
+    const gimm::MatchRunSummary done = gimm::match_dataset(*matcher, dataset, out, run);
+    std::printf("gimm-baseline %s: %zu pairs, %zu matches -> %s\n", method.c_str(), done.pairs,
+                done.matches, out.c_str());
     return 0;
   });
 }

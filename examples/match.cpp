@@ -47,7 +47,6 @@
 #include <sstream>
 
 #include "cli_common.hpp"
-#include "gimm/core/progress.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/io/camera_json.hpp"
@@ -60,6 +59,7 @@
 #include "gimm/match/learned_options.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/pipeline/dicom_pair.hpp"
+#include "gimm/pipeline/match_run.hpp"
 #include "gimm/render/image_degradation.hpp"
 #include "match/methods.hpp"
 
@@ -77,112 +77,6 @@ gimm::Image<float> read_view_png(const char* flag, const std::string& path) {
              flag << " '" << path << "' is " << image.cols() << " x " << image.rows()
                   << " px; the matchers need at least 16 x 16");
   return image;
-}
-
-struct MatchedCounts {
-  std::size_t matches = 0;
-  std::size_t without_F = 0;  ///< pairs written with no gating F
-};
-
-/// Matches every pair of `ids` into pred_dir/<patient>/<pair>.json, with a progress line.
-MatchedCounts match_pairs(const gimm::PairMatcher& matcher, gimm::DatasetReader& reader,
-                          const std::vector<std::string>& ids, bool use_cameras, bool formed,
-                          const std::filesystem::path& pred_dir,
-                          const gimm::CameraError& camera_error,
-                          const gimm::ImageDegradation& degradation, std::uint64_t seed,
-                          gimm::ProgressLine& progress) {
-  const auto start = std::chrono::steady_clock::now();
-  MatchedCounts counts;
-  for (std::size_t n = 0; n < ids.size(); ++n) {
-    const gimm::PairTruth truth = reader.pair(ids[n]);
-    const std::string patient = gimm::split_pair_id(ids[n]).first;
-    const gimm::DatasetLayout& layout = reader.layout();
-    gimm::PairInput input;
-    input.id = ids[n];
-    input.class_a = truth.view_class_a;
-    input.class_b = truth.view_class_b;
-    input.truth = &truth;
-    gimm::Image<float> a, b;
-    gimm::Image<std::uint8_t> field_a, field_b;
-    if (formed) {  // the views as a C-arm forms them, matched inside their exposed fields
-      field_a = gimm::read_png8(layout.view_field(patient, truth.view_a));
-      field_b = gimm::read_png8(layout.view_field(patient, truth.view_b));
-      input.field_a = &field_a;
-      input.field_b = &field_b;
-    }
-    if (matcher.needs_images()) {
-      const auto image = [&](const std::string& view) {
-        return formed ? layout.view_formed(patient, view) : layout.view_image(patient, view);
-      };
-      a = gimm::read_png_unit(image(truth.view_a));
-      b = gimm::read_png_unit(image(truth.view_b));
-      if (!degradation.none()) {  // what the matcher sees is degraded, the truth is not
-        gimm::Rng rng = gimm::baseline_stream(seed, "image-degradation", ids[n]);
-        a = gimm::degrade_image(a, degradation, rng);
-        b = gimm::degrade_image(b, degradation, rng);
-      }
-      input.image_a = &a;
-      input.image_b = &b;
-    }
-    if (use_cameras) {
-      input.camera_a = reader.camera(patient, truth.view_a);
-      input.camera_b = reader.camera(patient, truth.view_b);
-      if (!camera_error.none()) {  // the matcher's cameras are off, the images are not
-        gimm::Rng rng = gimm::baseline_stream(seed, "camera-error", ids[n]);
-        const Eigen::Vector3d pivot = gimm::pair_isocentre(*input.camera_a, *input.camera_b);
-        input.camera_a = gimm::perturbed_camera(*input.camera_a, pivot, camera_error, rng);
-        input.camera_b = gimm::perturbed_camera(*input.camera_b, pivot, camera_error, rng);
-      }
-    }
-    const gimm::PairMatches matches = matcher.match(input);
-    gimm::write_matches(gimm::matches_path(pred_dir, ids[n]), matches);
-    counts.matches += matches.size();
-    counts.without_F += !matches.F;
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    char line[160];
-    std::snprintf(line, sizeof line, "gimm-match: %zu/%zu pairs, %.2f s/pair, ETA %.0f s   ", n + 1,
-                  ids.size(), seconds / double(n + 1),
-                  seconds / double(n + 1) * double(ids.size() - n - 1));
-    progress.show(line);
-  }
-  return counts;
-}
-
-/// Every pair of a gimm-dataset split into PRED_DIR/<patient>/<pair>.json. `estimate_from`: the
-/// fewest matches the matcher estimates its gating F from (learned, --geometry matches, a
-/// gate), else 0.
-int match_dataset(const gimm::PairMatcher& matcher, const std::string& dataset,
-                  const std::string& split, bool use_cameras, bool formed, int estimate_from,
-                  const std::string& out, const gimm::CameraError& camera_error,
-                  const gimm::ImageDegradation& degradation, std::uint64_t seed) {
-  gimm::DatasetReader reader(dataset);
-  const auto ids = reader.pair_ids(split);
-  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
-  MatchedCounts counts;
-  gimm::ProgressLine progress(false);
-  // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
-  // (a full disk) leaves `out` as it was.
-  try {
-    gimm::write_folder_all_or_nothing(out, [&](const std::filesystem::path& staged) {
-      counts = match_pairs(matcher, reader, ids, use_cameras, formed, staged, camera_error,
-                           degradation, seed, progress);
-    });
-  } catch (...) {
-    progress.finish();  // the progress line ends before the error is printed
-    throw;
-  }
-  progress.finish();
-  std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", ids.size(), counts.matches,
-              out.c_str());
-  // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
-  // without F is written ungated.
-  if (estimate_from > 0 && counts.without_F > 0)
-    std::printf(
-        "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
-        "matches, or a degenerate fit); those pairs are not gated\n",
-        counts.without_F, ids.size(), estimate_from);
-  return 0;
 }
 
 }  // namespace
@@ -375,7 +269,15 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
   app.add_option("--picture", picture, "PNG of the two views with the matches drawn");
 
-  gimm::cli::option_flags() = {{"DicomReadOptions::pitch_mm", "--pixel-a, --pixel-b"}};
+  gimm::cli::option_flags() = {{"DicomReadOptions::pitch_mm", "--pixel-a, --pixel-b"},
+                               {"MatchRunOptions::images", "--images"},
+                               {"MatchRunOptions::camera_error", "--camera-error-deg/-mm"},
+                               {"MatchRunOptions::use_cameras", "--geometry cameras"},
+                               {"MatchRunOptions::degradation", "--noise-photons/--blur-px"},
+                               {"CameraError::deg", "--camera-error-deg"},
+                               {"CameraError::mm", "--camera-error-mm"},
+                               {"ImageDegradation::photons", "--noise-photons"},
+                               {"ImageDegradation::blur_px", "--blur-px"}};
   return gimm::cli::run(app, argc, argv, [&] {
     gimm::cli::keep_freed_memory();
     gimm::cli::refuse_outputs_over_inputs(
@@ -478,23 +380,31 @@ int main(int argc, char** argv) {
         else
           matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
       }
-      GIMM_USAGE_CHECK(camera_error.none() || geometry == "cameras",
-                       "--camera-error-deg/-mm perturb the cameras: they need --geometry cameras");
-      gimm::cli::flag_value("--noise-photons/--blur-px", [&] { degradation.validate(); });
-      GIMM_USAGE_CHECK(degradation.none() || matcher->needs_images(),
-                       "--noise-photons/--blur-px degrade the images, and --method "
-                           << method << " does not look at them");
+      gimm::MatchRunOptions run;
+      run.split = split;
+      run.use_cameras = geometry == "cameras";
+      run.images = images == "formed"     ? gimm::DatasetImages::formed
+                   : images == "rendered" ? gimm::DatasetImages::rendered
+                                          : gimm::DatasetImages::automatic;
+      run.camera_error = camera_error;
+      run.degradation = degradation;
+      run.seed = seed;
+      run.report = gimm::stderr_reporter(false, "gimm-match: ");
+      const gimm::DatasetReader reader(dataset);
+      gimm::cli::flag_value("", [&] { run.validate(*matcher, reader); });
+      const gimm::MatchRunSummary done = gimm::match_dataset(*matcher, dataset, out, run);
+      std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", done.pairs, done.matches,
+                  out.c_str());
+      // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
+      // without F is written ungated.
       const bool estimates_F =
           method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
-      const bool has_formed = gimm::DatasetReader(dataset).has_formed_views();
-      GIMM_USAGE_CHECK(images != "formed" || has_formed,
-                       "--images formed: " << dataset
-                                           << " has no formed views (made without a formation "
-                                              "stage: gimm-dataset --style drr or --no-formation)");
-      const bool formed = images == "formed" || (images == "auto" && has_formed);
-      return match_dataset(*matcher, dataset, split, geometry == "cameras", formed,
-                           estimates_F ? options.gate.min_matches : 0, out, camera_error,
-                           degradation, seed);
+      if (estimates_F && done.without_F > 0)
+        std::printf(
+            "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
+            "matches, or a degenerate fit); those pairs are not gated\n",
+            done.without_F, done.pairs, options.gate.min_matches);
+      return 0;
     }
     // One pair: from DICOM files, or from PNG images and camera JSON files.
     for (const char* flag :

@@ -3,7 +3,6 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "gimm/geometry/epipolar.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/match/geometric.hpp"
 #include "gimm/match/reconstruct.hpp"
@@ -58,21 +57,12 @@ int match_geometric_pair(const LoadedPair& pair, const gimm::GeometricOptions& o
   GIMM_ASSERT(pair.camera_a && pair.camera_b);  // gimm-match refuses the pair without them
   const gimm::Image<float>& a = pair.a;
   const gimm::Image<float>& b = pair.b;
-  gimm::PairInput input;
-  input.id = outputs.pair;
-  input.image_a = &a;
-  input.image_b = &b;
-  input.camera_a = pair.camera_a;
-  input.camera_b = pair.camera_b;
-  input.field_a = pair.field(true);
-  input.field_b = pair.field(false);
+  const gimm::PairInput input = pair.input(outputs.pair);
   const auto loaded = std::chrono::steady_clock::now();
-  const std::vector<gimm::GeometricMatch> found =
-      gimm::GeometricMatcher(options).match_with_points(input);
+  const gimm::GeometricPairResult result = gimm::GeometricMatcher(options).run_with_points(input);
   const auto matched = std::chrono::steady_clock::now();
-  gimm::PairMatches matches = gimm::GeometricMatcher::to_pair_matches(outputs.pair, found);
-  matches.F = gimm::fundamental_from_cameras(*input.camera_a, *input.camera_b);
-  matches.F_source = "cameras";
+  const std::vector<gimm::GeometricMatch>& found = result.points;
+  const gimm::PairMatches& matches = result.matches;
   // All or nothing: a failure (a full disk) leaves the files of an earlier run as they were.
   gimm::write_all_or_nothing([&](const auto& at) {
     if (!outputs.picture.empty()) write_picture(at(outputs.picture).string(), a, b, matches);

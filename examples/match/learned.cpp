@@ -4,7 +4,6 @@
 #include <nlohmann/json.hpp>
 
 #include "gimm/io/files.hpp"
-#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/reconstruct.hpp"
 #include "gimm/match/tree_file.hpp"
@@ -66,12 +65,9 @@ int match_learned_pair(const LearnedChoice& choice, gimm::MatchOptions options,
   const gimm::Image<float>& a = pair.a;
   const gimm::Image<float>& b = pair.b;
   const auto loaded = std::chrono::steady_clock::now();
-  gimm::PairMatchResult result =
-      gimm::match_pair(matcher, a, b, class_a, class_b, pair.camera_a, pair.camera_b, options);
-  const std::size_t outside =
-      gimm::drop_outside_fields(result.matches, pair.field(true), pair.field(false));
+  const gimm::PairMatchResult result =
+      gimm::match_pair(matcher, pair.input(outputs.pair, class_a, class_b), options);
   const auto matched = std::chrono::steady_clock::now();
-  result.matches.pair = outputs.pair;
   std::optional<gimm::Reconstruction> rec;
   if (!outputs.tree.empty() || !outputs.tree_vtk.empty())
     rec = gimm::reconstruct_matches(
@@ -84,12 +80,12 @@ int match_learned_pair(const LearnedChoice& choice, gimm::MatchOptions options,
     if (rec) write_reconstruction(at(outputs.tree).string(), at(outputs.tree_vtk).string(), *rec);
   });
   const auto ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
-  std::cout << "gimm-match: " << result.matches.size() << " matches (network "
-            << result.network_matches << ", in padding " << result.dropped_in_padding
-            << ", gated out " << result.dropped_by_gate << ", outside the exposed field " << outside
-            << "; F from " << result.fundamental_source << ", gate " << choice.gate_name
-            << "); load " << ms(loaded - outputs.start) << " ms, match " << ms(matched - loaded)
-            << " ms\n";
+  std::cout << "gimm-match: " << result.matches.size() << " matches (network " << result.candidates
+            << ", in padding " << result.dropped_in_padding << ", gated out "
+            << result.dropped_by_gate << ", outside the exposed field "
+            << result.dropped_outside_field << "; F from " << result.fundamental_source()
+            << ", gate " << choice.gate_name << "); load " << ms(loaded - outputs.start)
+            << " ms, match " << ms(matched - loaded) << " ms\n";
   if (rec)
     std::cout << "gimm-match: " << rec->points.size() << " points triangulated ("
               << rec->dropped_reprojection << " dropped past the reprojection limit, "

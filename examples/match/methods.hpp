@@ -30,6 +30,21 @@ struct LoadedPair {
     const auto& f = a_side ? field_a : field_b;
     return f.size() ? &f : nullptr;
   }
+  /// The pair as the matchers take it (pointing into this).
+  gimm::PairInput input(const std::string& id, int class_a = gimm::kUnknownViewClass,
+                        int class_b = gimm::kUnknownViewClass) const {
+    gimm::PairInput in;
+    in.id = id;
+    in.image_a = &a;
+    in.image_b = &b;
+    in.class_a = class_a;
+    in.class_b = class_b;
+    in.camera_a = camera_a;
+    in.camera_b = camera_b;
+    in.field_a = field(true);
+    in.field_b = field(false);
+    return in;
+  }
 };
 
 /// Where one pair's results go; an empty path is not written.

@@ -258,7 +258,8 @@ class Matcher:
               camera_a: Optional[_CameraLike] = None, camera_b: Optional[_CameraLike] = None, *,
               gate: Optional[_Gate] = None, tau: float = 2.0, delta_px: Optional[float] = None,
               top_k: int = 256, min_matches: int = 32, input_size: Optional[int] = None,
-              snap_to_epipolar: Optional[bool] = None) -> Dict[str, Any]: ...
+              snap_to_epipolar: Optional[bool] = None, field_a: Optional[np.ndarray] = None,
+              field_b: Optional[np.ndarray] = None) -> Dict[str, Any]: ...
 
 
 def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraLike,
@@ -270,6 +271,13 @@ def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraL
                     detect_fields: Optional[bool] = None,
                     keep_catheter: bool = False) -> Dict[str, Any]: ...
 def exposed_field(image: np.ndarray) -> np.ndarray: ...
+def match_dataset(dataset: _Path, out: _Path,
+                  matcher: Union[Matcher, Literal["geometric", "epipolar", "oracle"]], *,
+                  split: Literal["all", "train", "val", "test"] = "all",
+                  images: Literal["auto", "rendered", "formed"] = "auto",
+                  use_cameras: bool = True, camera_error_deg: float = 0.0,
+                  camera_error_mm: float = 0.0, noise_photons: float = 0.0, blur_px: float = 0.0,
+                  seed: int = 0, **kwargs: Any) -> Dict[str, Any]: ...
 def match_baseline(truth: Mapping[str, Any], method: Literal["epipolar", "oracle"] = "epipolar",
                    *, sigma_px: float = 1.0, max_points: int = 300,
                    seed: int = 0) -> Dict[str, Any]: ...

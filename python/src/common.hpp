@@ -26,6 +26,7 @@
 #include "gimm/core/volume.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
 
 namespace gimm::python {
@@ -454,6 +455,16 @@ Camerad camera_of(const py::handle& obj, const std::string& name);
 
 /// Matches as the module returns them: dict(points_a, points_b, confidence, F, F_source, pair).
 py::dict matches_dict(PairMatches m);
+
+/// Every matcher's result as the module returns it: matches_dict without the pair, F_source
+/// 'none' when there is no F, and candidates, dropped_in_padding, dropped_by_gate,
+/// dropped_outside_field, seconds.
+py::dict result_dict(PairMatchResult r);
+
+/// An exposed field given to a matcher (`given`, nonzero = exposed) as a mask of its image's
+/// size; None: nullopt. Raises ValueError naming `name` for another size.
+std::optional<Image<std::uint8_t>> optional_field(const py::object& given, const Image<float>& image,
+                                                  const char* name);
 
 // ---- the parts of the module, one per source file -----------------------------------------
 

@@ -9,8 +9,73 @@
 #include "common.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/io/png.hpp"
+#include "gimm/match/baselines.hpp"
+#include "gimm/match/geometric.hpp"
+#include "gimm/match/learned.hpp"
+#include "gimm/pipeline/match_run.hpp"
 
 namespace gimm::python {
+
+namespace {
+
+DatasetImages dataset_images(const std::string& images) {
+  if (images == "auto") return DatasetImages::automatic;
+  if (images == "rendered") return DatasetImages::rendered;
+  if (images == "formed") return DatasetImages::formed;
+  throw py::value_error("match_dataset: images must be 'auto', 'rendered' or 'formed', got '" +
+                        images + "'");
+}
+
+/// The matcher match_dataset was given: a gimm.Matcher (learned, with the gate its weights
+/// record), or a method's name with its options.
+std::unique_ptr<PairMatcher> dataset_matcher(const py::object& matcher, const py::dict& options,
+                                             std::uint64_t seed) {
+  const auto take = [&](const char* key, auto fallback) {
+    using T = decltype(fallback);
+    if (!options.contains(key)) return fallback;
+    T value = options[key].cast<T>();
+    options.attr("pop")(key);
+    return value;
+  };
+  std::unique_ptr<PairMatcher> out;
+  if (py::isinstance<nn::Matcher>(matcher)) {
+    const nn::Matcher& network = matcher.cast<const nn::Matcher&>();
+    MatchOptions o;
+    o.input_size = network.config().input_size;
+    apply_gate_choice(network.config(), GateChoice{}, o);
+    out = std::make_unique<LearnedMatcher>(network, o);
+  } else {
+    const std::string method = py::str(matcher).cast<std::string>();
+    if (method == "geometric") {
+      GeometricOptions o;
+      o.use_masks = !take("segment", false);
+      o.epipolar_tolerance_px = take("tolerance_px", o.epipolar_tolerance_px);
+      if (take("keep_catheter", false)) o.catheter.min_length_mm = 0, o.catheter.field_edge_px = 0;
+      out = std::make_unique<GeometricMatcher>(o);
+    } else if (method == "oracle") {
+      const double sigma = take("sigma_px", 1.0);
+      if (!(std::isfinite(sigma) && sigma >= 0))
+        throw py::value_error("match_dataset: sigma_px must be finite and >= 0, got " +
+                              std::to_string(sigma));
+      out = std::make_unique<OracleMatcher>(sigma, seed);
+    } else if (method == "epipolar") {
+      EpipolarBaselineOptions o;
+      o.max_points = take("max_points", o.max_points);
+      if (o.max_points == 0) throw py::value_error("match_dataset: max_points must be > 0");
+      out = std::make_unique<EpipolarMatcher>(o, seed);
+    } else {
+      throw py::value_error(
+          "match_dataset: matcher must be a gimm.Matcher or 'geometric', 'epipolar' or 'oracle', "
+          "got '" + method + "'");
+    }
+  }
+  if (!options.empty())  // an option of another matcher would be ignored: refuse it
+    throw py::value_error("match_dataset: " + py::str(options.attr("keys")()).cast<std::string>() +
+                          " are not options of the " + out->name() + " matcher");
+  return out;
+}
+
+}  // namespace
 
 void bind_dataset(py::module_& m) {
   py::class_<DatasetReader>(m, "Dataset", R"doc(
@@ -68,6 +133,52 @@ reads it). manifest: the manifest as a dict.)doc")
       .def_property_readonly("root", [](const DatasetReader& r) { return r.root().string(); })
       .def("__repr__",
            [](const DatasetReader& r) { return "gimm.Dataset('" + r.root().string() + "')"; });
+
+  m.def(
+      "match_dataset",
+      [](const std::filesystem::path& dataset, const std::filesystem::path& out,
+         const py::object& matcher, const std::string& split, const std::string& images,
+         bool use_cameras, double camera_error_deg, double camera_error_mm, double noise_photons,
+         double blur_px, std::uint64_t seed, const py::kwargs& kwargs) {
+        py::dict options(kwargs);  // the matcher's own options, taken out as they are read
+        const std::unique_ptr<PairMatcher> chosen = dataset_matcher(matcher, options, seed);
+        MatchRunOptions run;
+        run.split = split;
+        run.images = dataset_images(images);
+        run.use_cameras = use_cameras;
+        run.camera_error = {camera_error_deg, camera_error_mm};
+        run.degradation = {noise_photons, blur_px};
+        run.seed = seed;
+        MatchRunSummary summary;
+        {
+          py::gil_scoped_release release;
+          summary = match_dataset(*chosen, dataset, out, run);
+        }
+        py::dict d;
+        d["pairs"] = summary.pairs;
+        d["matches"] = summary.matches;
+        d["without_F"] = summary.without_F;
+        d["formed"] = summary.formed;
+        d["seconds"] = summary.seconds;
+        return d;
+      },
+      py::arg("dataset"), py::arg("out"), py::arg("matcher"), py::kw_only(),
+      py::arg("split") = "all", py::arg("images") = "auto", py::arg("use_cameras") = true,
+      py::arg("camera_error_deg") = 0.0, py::arg("camera_error_mm") = 0.0,
+      py::arg("noise_photons") = 0.0, py::arg("blur_px") = 0.0, py::arg("seed") = 0, R"doc(
+Matches every pair of a gimm-dataset split into out/<patient>/<pair>.json (gimm-matches/1, what
+gimm-eval and evaluate() score), as gimm-match --dataset does (pipeline/match_run.hpp): all or
+nothing, a failed run leaves out as it was.
+
+matcher: a gimm.Matcher (the learned matcher, with the gate and input size its weights record),
+or 'geometric' (options: segment=False (True: segment the images instead of following the
+dataset's masks), tolerance_px=3.0, keep_catheter=False), 'epipolar' (max_points=300) or
+'oracle' (sigma_px=1.0); an option of another matcher raises ValueError. split: 'all', 'train',
+'val', 'test'. images: 'auto' (formed views where the dataset has them), 'rendered', 'formed'.
+use_cameras: give the matcher the views' cameras (False: the learned matcher estimates F from its
+matches). camera_error_deg, camera_error_mm: move the matcher's cameras (stability sweeps);
+noise_photons, blur_px: degrade the images it sees; seed: their random streams (and the
+baselines'). Returns dict(pairs, matches, without_F, formed, seconds). The GIL is released.)doc");
 }
 
 }  // namespace gimm::python

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "common.hpp"
-#include "gimm/geometry/epipolar.hpp"
 #include "gimm/match/field_of_view.hpp"
 #include "gimm/match/geometric.hpp"
 
@@ -42,37 +41,25 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
           throw py::value_error("match_geometric: give both mask_a and mask_b, or neither");
         const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
         const Image<float> b = image_from<float>(image_b, Accept::floating, "image_b");
-        PairTruth masks;
+        std::optional<Image<std::uint8_t>> ma, mb;
         if (!mask_a.is_none()) {
-          masks.mask_a = std::make_shared<Image<std::uint8_t>>(
-              image_from<std::uint8_t>(mask_a, Accept::mask, "mask_a"));
-          masks.mask_b = std::make_shared<Image<std::uint8_t>>(
-              image_from<std::uint8_t>(mask_b, Accept::mask, "mask_b"));
+          ma = image_from<std::uint8_t>(mask_a, Accept::mask, "mask_a");
+          mb = image_from<std::uint8_t>(mask_b, Accept::mask, "mask_b");
         }
         PairInput input;
-        input.id = "pair";
         input.image_a = &a;
         input.image_b = &b;
         input.camera_a = camera_of(camera_a, "camera_a");
         input.camera_b = camera_of(camera_b, "camera_b");
-        input.truth = mask_a.is_none() ? nullptr : &masks;
-        // The exposed fields: given, else found in the images (as gimm-match does for a pair).
+        input.mask_a = ma ? &*ma : nullptr;
+        input.mask_b = mb ? &*mb : nullptr;
+        // The exposed fields: given, else found when segmenting (as gimm-match does for a pair
+        // of images), not with masks (as gimm-match --dataset, whose masks are the truth's).
+        const bool find = detect.is_none() ? mask_a.is_none() : detect.cast<bool>();
         const auto field = [&](const py::object& given, const Image<float>& image,
                                const char* name) -> std::optional<Image<std::uint8_t>> {
-          if (!given.is_none()) {
-            Image<std::uint8_t> f = image_from<std::uint8_t>(given, Accept::mask, name);
-            if (f.rows() != image.rows() || f.cols() != image.cols())
-              throw py::value_error(std::string("match_geometric: ") + name + " is " +
-                                    std::to_string(f.cols()) + " x " + std::to_string(f.rows()) +
-                                    ", its image " + std::to_string(image.cols()) + " x " +
-                                    std::to_string(image.rows()));
-            return f;
-          }
-          // Default: found when segmenting (as gimm-match does for a pair of images), not with
-          // masks (as gimm-match --dataset, whose masks are the truth's).
-          const bool find = detect.is_none() ? mask_a.is_none() : detect.cast<bool>();
-          if (find) return exposed_field(image);
-          return std::nullopt;
+          if (!given.is_none() || !find) return optional_field(given, image, name);
+          return exposed_field(image);
         };
         const auto fa = field(field_a, a, "field_a"), fb = field(field_b, b, "field_b");
         input.field_a = fa ? &*fa : nullptr;
@@ -86,22 +73,18 @@ float (rows, cols) in [0, 1], dark vessels and frame on a bright field; at least
         // Working memory kept from call to call (about 25 MB at 512 px): a loop over pairs then
         // allocates it once, not per pair (docs/performance.md, "Geometric matcher").
         static const auto buffers = std::make_shared<ViewBufferPool>();
-        std::vector<GeometricMatch> found;
+        GeometricPairResult r;
         {
           py::gil_scoped_release release;
-          found = GeometricMatcher(o, buffers).match_with_points(input);
+          r = GeometricMatcher(o, buffers).run_with_points(input);
         }
-        PairMatches matches = GeometricMatcher::to_pair_matches("", found);
-        matches.F = fundamental_from_cameras(*input.camera_a, *input.camera_b);
-        matches.F_source = "cameras";
         std::vector<Eigen::Vector3d> world;
-        py::array_t<double> margin(static_cast<py::ssize_t>(found.size()));
-        for (std::size_t k = 0; k < found.size(); ++k) {
-          world.push_back(found[k].world);
-          margin.mutable_at(static_cast<py::ssize_t>(k)) = found[k].margin;
+        py::array_t<double> margin(static_cast<py::ssize_t>(r.points.size()));
+        for (std::size_t k = 0; k < r.points.size(); ++k) {
+          world.push_back(r.points[k].world);
+          margin.mutable_at(static_cast<py::ssize_t>(k)) = r.points[k].margin;
         }
-        py::dict d = matches_dict(std::move(matches));
-        d.attr("pop")("pair");
+        py::dict d = result_dict(std::move(r));
         d["world_mm"] = rows_to_numpy<3>(world);
         d["margin"] = margin;
         return d;
@@ -129,10 +112,11 @@ match/field_of_view.hpp), else the whole image; detect_fields None (default): fo
 images are segmented (as gimm-match does for one pair), not with masks (as gimm-match --dataset).
 keep_catheter: keep the segmented chains that look like the catheter (long and straight,
 match/catheter_cue.hpp), which are dropped by default (gimm-match --keep-catheter).
-Returns dict(points_a, points_b (N, 2) pixels (u, v), confidence (N,) (the ranking: the margin
-times how well the match is placed), margin (N,) (the DP margin, what min_confidence
-thresholds), world_mm (N, 3) the triangulated points in patient mm, F (3, 3) from the cameras,
-F_source 'cameras'). The GIL is released while matching. The working memory of segmentation and
+Returns the result every matcher returns (Matcher.match too): dict(points_a, points_b (N, 2)
+pixels (u, v), confidence (N,) (the ranking: the margin times how well the match is placed),
+F (3, 3) from the cameras, F_source 'cameras', candidates, dropped_* (0), seconds), and margin
+(N,) (the DP margin, what min_confidence thresholds), world_mm (N, 3) the triangulated points in
+patient mm. The GIL is released while matching. The working memory of segmentation and
 centerlines is kept between calls (about 25 MB at 512 px), so matching pair after pair does not
 allocate it again.)doc");
 }

@@ -59,7 +59,8 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
           [](const nn::Matcher& net, const py::handle& image_a, const py::handle& image_b,
              int class_a, int class_b, const py::object& camera_a, const py::object& camera_b,
              const py::object& gate, double tau, const py::object& delta_px, int top_k,
-             int min_matches, const py::object& input_size, const py::object& snap_to_epipolar) {
+             int min_matches, const py::object& input_size, const py::object& snap_to_epipolar,
+             const py::object& field_a, const py::object& field_b) {
             const Image<float> a = image_from<float>(image_a, Accept::floating, "image_a");
             const Image<float> b = image_from<float>(image_b, Accept::floating, "image_b");
             std::optional<Camerad> ca, cb;
@@ -75,24 +76,30 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
             if (!delta_px.is_none()) chosen.delta_px = delta_px.cast<double>();
             if (!snap_to_epipolar.is_none()) chosen.snap = snap_to_epipolar.cast<bool>();
             apply_gate_choice(net.config(), chosen, o);
+            PairInput input;
+            input.image_a = &a;
+            input.image_b = &b;
+            input.class_a = class_a;
+            input.class_b = class_b;
+            input.camera_a = ca;
+            input.camera_b = cb;
+            const auto fa = optional_field(field_a, a, "field_a");
+            const auto fb = optional_field(field_b, b, "field_b");
+            input.field_a = fa ? &*fa : nullptr;
+            input.field_b = fb ? &*fb : nullptr;
             PairMatchResult r;
             {
               py::gil_scoped_release release;
-              r = match_pair(net, a, b, class_a, class_b, ca, cb, o);
+              r = match_pair(net, input, o);
             }
-            if (!r.F) r.matches.F_source = "none";  // Python's dict says so explicitly
-            py::dict d = matches_dict(std::move(r.matches));
-            d.attr("pop")("pair");
-            d["network_matches"] = r.network_matches;
-            d["dropped_in_padding"] = r.dropped_in_padding;
-            d["dropped_by_gate"] = r.dropped_by_gate;
-            return d;
+            return result_dict(std::move(r));
           },
           py::arg("image_a"), py::arg("image_b"), py::arg("class_a") = 0, py::arg("class_b") = 0,
           py::arg("camera_a") = py::none(), py::arg("camera_b") = py::none(), py::kw_only(),
           py::arg("gate") = py::none(), py::arg("tau") = 2.0, py::arg("delta_px") = py::none(),
           py::arg("top_k") = 256, py::arg("min_matches") = 32, py::arg("input_size") = py::none(),
-          py::arg("snap_to_epipolar") = py::none(), R"doc(
+          py::arg("snap_to_epipolar") = py::none(), py::arg("field_a") = py::none(),
+          py::arg("field_b") = py::none(), R"doc(
 Matches coronary points between two angiograms, as gimm-match does for one pair.
 
 image_a, image_b: float (rows, cols) in [0, 1], bright background and dark vessels (render()'s
@@ -102,12 +109,15 @@ uses their exact F, without it F is estimated from the matches (gate_reference).
 (drops matches farther than delta_px from their epipolar lines), 'soft', 'logit' (rescale by
 tau), 'none'. gate, delta_px, snap_to_epipolar (move B points onto their epipolar lines):
 None takes what the weights record (the shipped ones: 'hard', 4 px, snapping), else 'hard',
-2 px, no snapping, as gimm-match without those flags. input_size: the longer side the images are resized to, None: the weights'
-(gimm-match's default), 0: the images' own size.
-Returns dict(points_a, points_b (N, 2) pixels (u, v) with centres at integers, confidence (N,),
-F (3, 3) with x_b^T F x_a = 0 or None, F_source 'cameras' | 'matches' | 'none',
-network_matches, dropped_in_padding, dropped_by_gate). The images are copied into gimm's
-storage; the GIL is released while matching.)doc");
+2 px, no snapping, as gimm-match without those flags. input_size: the longer side the images are
+resized to, None: the weights' (gimm-match's default), 0: the images' own size. field_a,
+field_b: the exposed fields (nonzero = exposed, each its image's size; exposed_field finds them),
+matches with an end outside are dropped; None: the whole image.
+Returns the result every matcher returns (match_geometric too): dict(points_a, points_b (N, 2)
+pixels (u, v) with centres at integers, confidence (N,), F (3, 3) with x_b^T F x_a = 0 or None,
+F_source 'cameras' | 'matches' | 'none', candidates (the network's matches), dropped_in_padding,
+dropped_by_gate, dropped_outside_field, seconds). The images are copied into gimm's storage; the
+GIL is released while matching.)doc");
 }
 
 }  // namespace gimm::python

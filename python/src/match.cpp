@@ -123,6 +123,29 @@ py::dict matches_dict(PairMatches m) {
   return d;
 }
 
+py::dict result_dict(PairMatchResult r) {
+  if (!r.matches.F) r.matches.F_source = "none";  // Python's dict says so explicitly
+  py::dict d = matches_dict(std::move(r.matches));
+  d.attr("pop")("pair");
+  d["candidates"] = r.candidates;
+  d["dropped_in_padding"] = r.dropped_in_padding;
+  d["dropped_by_gate"] = r.dropped_by_gate;
+  d["dropped_outside_field"] = r.dropped_outside_field;
+  d["seconds"] = r.seconds;
+  return d;
+}
+
+std::optional<Image<std::uint8_t>> optional_field(const py::object& given, const Image<float>& image,
+                                                  const char* name) {
+  if (given.is_none()) return std::nullopt;
+  Image<std::uint8_t> f = image_from<std::uint8_t>(given, Accept::mask, name);
+  if (f.rows() != image.rows() || f.cols() != image.cols())
+    throw py::value_error(std::string(name) + " is " + std::to_string(f.cols()) + " x " +
+                          std::to_string(f.rows()) + ", its image " + std::to_string(image.cols()) +
+                          " x " + std::to_string(image.rows()));
+  return f;
+}
+
 void bind_match(py::module_& m) {
   m.def(
       "match_baseline",

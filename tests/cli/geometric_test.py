@@ -121,7 +121,7 @@ with open(other, "w") as f:
     json.dump(cam, f)
 cases = [
     ("no cameras", ["--method", "geometric", "--image-a", A, "--image-b", B], "--camera-a"),
-    ("camera size", [*pair[:-2], "--camera-b", other], "128 x 128"),
+    ("camera size", [*pair[:-2], "--camera-b", other], "camera B is 128x128 px, image B 256x256"),
     ("tree without cameras", ["--image-a", A, "--image-b", B, "--tree",
                               os.path.join(TMP, "t.json")], "give --camera-a/b"),
     ("noise on one pair", [*pair, "--noise-photons", 100], "--noise-photons is for the dataset"),

@@ -6,6 +6,7 @@
 
 #include "gimm/geometry/carm.hpp"
 #include "gimm/match/baselines.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned.hpp"
 #include "gimm/match/reconstruct.hpp"
 #include "gimm/nn/matcher_file.hpp"
@@ -35,6 +36,20 @@ gimm::PairTruth crossing_truth() {
 bool same(const gimm::PairMatches& x, const gimm::PairMatches& y) {
   return x.pair == y.pair && x.points_a == y.points_a && x.points_b == y.points_b &&
          x.confidence == y.confidence;
+}
+
+/// A pair of images as the matchers take it: view classes 3 and 7, cameras if given.
+gimm::PairInput pair_of(const gimm::Image<float>& a, const gimm::Image<float>& b,
+                        std::optional<gimm::Camerad> camera_a = std::nullopt,
+                        std::optional<gimm::Camerad> camera_b = std::nullopt) {
+  gimm::PairInput p;
+  p.image_a = &a;
+  p.image_b = &b;
+  p.class_a = 3;
+  p.class_b = 7;
+  p.camera_a = std::move(camera_a);
+  p.camera_b = std::move(camera_b);
+  return p;
 }
 
 /// The two images of a parity fixture as gimm images.
@@ -85,11 +100,10 @@ TEST_CASE("Matcher interface: the learned adapter equals match_pair", "[match]")
   input.class_a = 3;
   input.class_b = 7;
   CHECK(learned.name() == "learned");
-  gimm::PairMatches direct =
-      gimm::match_pair(gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors"), a, b,
-                       3, 7, std::nullopt, std::nullopt, options)
+  const gimm::PairMatches direct =
+      gimm::match_pair(gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors"), input,
+                       options)
           .matches;
-  direct.pair = input.id;
   const gimm::PairMatches via = learned.match(input);
   CHECK(via.size() > 0);
   CHECK(same(via, direct));
@@ -118,9 +132,9 @@ TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[m
   options.gate.delta_px = 1e6;  // keep everything: the snap alone is tested
   const gimm::nn::Matcher network =
       gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors");
-  const auto plain = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;
+  const auto plain = gimm::match_pair(network, pair_of(a, b, cam_a, cam_b), options).matches;
   options.snap_to_epipolar = true;
-  const auto snapped = gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options).matches;
+  const auto snapped = gimm::match_pair(network, pair_of(a, b, cam_a, cam_b), options).matches;
   REQUIRE(plain.size() > 0);
   REQUIRE(snapped.size() == plain.size());
   for (std::size_t k = 0; k < plain.size(); ++k) {
@@ -130,7 +144,7 @@ TEST_CASE("Learned matcher: --snap puts every B point on its epipolar line", "[m
     CHECK(snapped.confidence[k] == plain.confidence[k]);
   }
   options.gate.mode = gimm::GateMode::none;
-  CHECK_THROWS_WITH(gimm::match_pair(network, a, b, 3, 7, cam_a, cam_b, options),
+  CHECK_THROWS_WITH(gimm::match_pair(network, pair_of(a, b, cam_a, cam_b), options),
                     Catch::Contains("needs an F"));
 }
 
@@ -148,8 +162,10 @@ TEST_CASE("Learned matcher: images of different sizes map back per image", "[mat
   gimm::MatchOptions options;
   options.gate.mode = gimm::GateMode::none;
   options.input_size = std::max(a.rows(), a.cols());
-  const auto same_size = gimm::match_pair(network, a, b, 3, 7, {}, {}, options).matches;
-  const auto larger = gimm::match_pair(network, a, b2, 3, 7, {}, {}, options).matches;
+  const auto same_size =
+      gimm::match_pair(network, pair_of(a, b, std::nullopt, std::nullopt), options).matches;
+  const auto larger =
+      gimm::match_pair(network, pair_of(a, b2, std::nullopt, std::nullopt), options).matches;
   REQUIRE(same_size.size() > 0);
   REQUIRE(larger.size() == same_size.size());
   for (std::size_t k = 0; k < larger.size(); ++k) {
@@ -163,7 +179,7 @@ TEST_CASE("Learned matcher: images of different sizes map back per image", "[mat
   carm.rows = a.rows();
   carm.cols = a.cols();
   const gimm::Camerad cam = carm.camera();
-  CHECK_THROWS_WITH(gimm::match_pair(network, a, b2, 3, 7, cam, cam, options),
+  CHECK_THROWS_WITH(gimm::match_pair(network, pair_of(a, b2, cam, cam), options),
                     Catch::Contains("camera B") && Catch::Contains("image B"));
 }
 
@@ -228,4 +244,59 @@ TEST_CASE("Reconstruction: exact matches triangulate to their points; off ones a
   }
   CHECK_THROWS_WITH(gimm::reconstruct_matches(matches, a, b, std::nan("")),
                     Catch::Contains("reprojection limit"));
+}
+
+TEST_CASE("Matcher interface: a pair whose parts do not fit is refused, naming the part",
+          "[match]") {
+  const gimm::Image<float> a(32, 32, 0.5f), b(32, 32, 0.5f);
+  const gimm::Image<std::uint8_t> mask(32, 32), small(16, 32);
+  gimm::CArm carm;
+  carm.rows = carm.cols = 32;
+  gimm::PairInput p = pair_of(a, b);
+  p.id = "p/x";
+  CHECK_NOTHROW(p.validate());
+  p.mask_a = &mask;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("'p/x'") &&
+                                      Catch::Contains("both vessel masks or neither") &&
+                                      Catch::Contains("only mask A"));
+  p.mask_b = &small;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("mask B is 32x16 px, image B 32x32"));
+  p.mask_a = p.mask_b = nullptr;
+  p.field_a = &small;
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("field A is 32x16 px"));
+  p.field_a = nullptr;
+  p.camera_b = carm.camera();
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("only camera B given"));
+  carm.rows = 64;
+  p.camera_a = carm.camera();
+  CHECK_THROWS_WITH(p.validate(), Catch::Contains("camera A is 32x64 px, image A 32x32"));
+}
+
+TEST_CASE("Learned matcher: matches with an end outside its exposed field are dropped", "[match]") {
+  const std::string fixture = std::string(GIMM_SOURCE_DIR) + "/tests/data/nn/";
+  const auto [a, b] = fixture_images(fixture + "parity_anchor_expected.safetensors");
+  const gimm::nn::Matcher network =
+      gimm::nn::load_matcher(fixture + "parity_anchor_weights.safetensors");
+  gimm::MatchOptions options;
+  options.gate.mode = gimm::GateMode::none;
+  gimm::PairInput pair = pair_of(a, b);
+  const gimm::PairMatchResult whole = gimm::match_pair(network, pair, options);
+  REQUIRE(whole.matches.size() >= 4);
+  CHECK(whole.dropped_outside_field == 0);
+  CHECK(whole.fundamental_source() == "none");
+  CHECK(whole.candidates == static_cast<int>(whole.matches.size()) + whole.dropped_in_padding);
+  // A's field: its left half only; B's: all of it.
+  gimm::Image<std::uint8_t> left(a.rows(), a.cols()), all(b.rows(), b.cols(), 1);
+  for (int r = 0; r < a.rows(); ++r)
+    for (int c = 0; c < a.cols() / 2; ++c) left(r, c) = 1;
+  pair.field_a = &left;
+  pair.field_b = &all;
+  const gimm::PairMatchResult inside = gimm::match_pair(network, pair, options);
+  std::size_t expected = 0;
+  for (const auto& p : whole.matches.points_a) expected += gimm::in_field(&left, p);
+  REQUIRE(expected > 0);
+  REQUIRE(expected < whole.matches.size());
+  CHECK(inside.matches.size() == expected);
+  CHECK(inside.dropped_outside_field == static_cast<int>(whole.matches.size() - expected));
+  for (const auto& p : inside.matches.points_a) CHECK(std::lround(p.x()) < a.cols() / 2);
 }

@@ -326,3 +326,59 @@ TEST_CASE("Geometric matcher: one matcher, pair after pair, gives a fresh matche
   }
   CHECK_THROWS_WITH(gimm::GeometricMatcher({}, nullptr), Catch::Contains("no buffer pool"));
 }
+
+TEST_CASE("Geometric matcher: run() is every matcher's result, with the cameras' F",
+          "[match][vesselness]") {
+  const auto curves = curves_pair(128);
+  const gimm::GeometricMatcher matcher;
+  const gimm::GeometricPairResult r = matcher.run_with_points(curves->pair);
+  const auto points = matcher.match_with_points(curves->pair);
+  check_same_matches(r.points, points);
+  REQUIRE(r.matches.size() == points.size());
+  CHECK(r.matches.pair == curves->pair.id);
+  CHECK(r.candidates == static_cast<int>(points.size()));
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    CHECK(r.matches.points_a[k] == points[k].a);
+    CHECK(r.matches.points_b[k] == points[k].b);
+    CHECK(r.matches.confidence[k] == points[k].confidence);
+  }
+  REQUIRE(r.matches.F);
+  CHECK(r.fundamental_source() == "cameras");
+  CHECK(r.matches.F->isApprox(
+      gimm::fundamental_from_cameras(*curves->pair.camera_a, *curves->pair.camera_b)));
+  // Through the interface: the same matches, the same F.
+  const gimm::PairMatches via = static_cast<const gimm::PairMatcher&>(matcher).match(curves->pair);
+  CHECK(via.points_b == r.matches.points_b);
+  CHECK(via.F == r.matches.F);
+}
+
+TEST_CASE("Geometric matcher: a user's masks are followed instead of the images",
+          "[match][vesselness]") {
+  // Masks of the images' dark pixels give the segmented answer's neighbourhood; an empty mask
+  // gives nothing although the images hold both curves; masks are ignored with use_masks off.
+  auto curves = curves_pair(128);
+  gimm::Image<std::uint8_t> ma(128, 128), mb(128, 128), empty(128, 128);
+  for (int r = 0; r < 128; ++r)
+    for (int c = 0; c < 128; ++c)
+      ma(r, c) = curves->a(r, c) < 0.5f, mb(r, c) = curves->b(r, c) < 0.5f;
+  gimm::PairInput with = curves->pair;
+  with.mask_a = &ma;
+  with.mask_b = &mb;
+  CHECK(gimm::GeometricMatcher().match(with).size() >= 10);
+  with.mask_a = &empty;
+  with.mask_b = &empty;
+  CHECK(gimm::GeometricMatcher().match(with).size() == 0);
+  gimm::GeometricOptions segment;
+  segment.use_masks = false;
+  CHECK(gimm::GeometricMatcher(segment).match(with).size() ==
+        gimm::GeometricMatcher(segment).match(curves->pair).size());
+  // Masks only (no images) are enough when the matcher follows them.
+  gimm::PairInput masks_only = with;
+  masks_only.mask_a = &ma;
+  masks_only.mask_b = &mb;
+  masks_only.image_a = masks_only.image_b = nullptr;
+  CHECK(gimm::GeometricMatcher().match(masks_only).size() >= 10);
+  masks_only.mask_b = nullptr;
+  CHECK_THROWS_WITH(gimm::GeometricMatcher().match(masks_only),
+                    Catch::Contains("both vessel masks or neither"));
+}

@@ -103,6 +103,63 @@ class DatasetTest(unittest.TestCase):
                     self.assertAlmostEqual(pooled[key], value, places=12, msg=(method, key))
         self.assertGreater(len(glob.glob(os.path.join(pred, "*", "*.json"))), 0)
 
+    def test_match_dataset_writes_what_the_clis_write(self):
+        """gimm.match_dataset is gimm-match --dataset's and gimm-baseline's job: the same files,
+        byte for byte, for the geometric matcher, the learned one and a baseline."""
+        match, baseline = cli("gimm-match"), cli("gimm-baseline")
+        if match is None or baseline is None:
+            self.skipTest("gimm-match / gimm-baseline not built")
+        cases = (
+            ("geometric", [match, "--method", "geometric", "--segment"], {"segment": True}),
+            (gimm.Matcher(), [match], {}),
+            ("oracle", [baseline, "--method", "oracle", "--sigma", 2, "--seed", 3],
+             {"sigma_px": 2.0, "seed": 3}),
+        )
+        for n, (matcher, command, options) in enumerate(cases):
+            theirs = tmp_path("dataset", "cli-%d" % n, "x")[:-2]
+            ours = tmp_path("dataset", "py-%d" % n, "x")[:-2]
+            for folder in (theirs, ours):
+                shutil.rmtree(folder, ignore_errors=True)
+            run(*command, "--dataset", self.root, "--out", theirs)
+            done = gimm.match_dataset(self.root, ours, matcher, **options)
+            self.assertEqual(done["pairs"], 27)
+            self.assertFalse(done["formed"])  # a drr-style dataset has no formed views
+            files = sorted(os.path.relpath(f, theirs)
+                           for f in glob.glob(os.path.join(theirs, "*", "*.json")))
+            self.assertEqual(len(files), 27)
+            self.assertEqual(files, sorted(os.path.relpath(f, ours)
+                                           for f in glob.glob(os.path.join(ours, "*", "*.json"))))
+            total = 0
+            for f in files:
+                with open(os.path.join(theirs, f), "rb") as a, open(os.path.join(ours, f), "rb") as b:
+                    self.assertEqual(a.read(), b.read(), (matcher, f))
+                total += len(gimm.read_matches(os.path.join(ours, f))["confidence"])
+            self.assertEqual(total, done["matches"])
+        geometric = gimm.read_matches(os.path.join(ours.replace("py-2", "py-0"), files[0]))
+        self.assertEqual(geometric["F_source"], "cameras")  # the F the matches follow
+
+    def test_match_dataset_refuses_what_it_would_ignore(self):
+        out = tmp_path("dataset", "refused")
+        shutil.rmtree(out, ignore_errors=True)
+        with self.assertRaisesRegex(ValueError, r"'sigma_px'.*not options of the geometric"):
+            gimm.match_dataset(self.root, out, "geometric", sigma_px=1.0)
+        with self.assertRaisesRegex(ValueError, "matcher must be a gimm.Matcher or 'geometric'"):
+            gimm.match_dataset(self.root, out, "nearest")
+        with self.assertRaisesRegex(ValueError, "images must be 'auto', 'rendered' or 'formed'"):
+            gimm.match_dataset(self.root, out, "oracle", images="x")
+        with self.assertRaisesRegex(gimm.Error, "MatchRunOptions::images formed: .* no formed"):
+            gimm.match_dataset(self.root, out, "geometric", images="formed")
+        with self.assertRaisesRegex(gimm.Error, "oracle matcher does not look at them"):
+            gimm.match_dataset(self.root, out, "oracle", noise_photons=100)
+        with self.assertRaisesRegex(gimm.Error, "camera_error moves the cameras"):
+            gimm.match_dataset(self.root, out, "geometric", use_cameras=False,
+                               camera_error_deg=1.0)
+        with self.assertRaisesRegex(gimm.Error, r"CameraError::deg must be in \[0, 45\]"):
+            gimm.match_dataset(self.root, out, "geometric", camera_error_deg=90.0)
+        with self.assertRaisesRegex(gimm.Error, "no pairs in"):
+            gimm.match_dataset(self.root, out, "oracle", split="test")
+        self.assertFalse(os.path.exists(out))  # nothing written by a refused run
+
     def test_bad_input_is_named(self):
         with self.assertRaisesRegex(gimm.Error, "nowhere"):
             gimm.Dataset(tmp_path("dataset", "nowhere"))

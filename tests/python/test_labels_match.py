@@ -142,7 +142,7 @@ class Matching(unittest.TestCase):
         ib = renderer().render(b)["intensity"]
         out = self.matcher.match(ia, ib, 8, 10, a.camera(), b.camera())
         n = len(out["confidence"])
-        self.assertGreater(out["network_matches"], 10)  # the phantom-trained network: a few dozen
+        self.assertGreater(out["candidates"], 10)  # the phantom-trained network: a few dozen
         self.assertGreater(n, 0)
         self.assertEqual(out["points_a"].shape, (n, 2))
         self.assertEqual(out["points_b"].shape, (n, 2))
@@ -154,7 +154,7 @@ class Matching(unittest.TestCase):
         d2 = gimm.symmetric_epipolar_distance_sq(out["F"], out["points_a"], out["points_b"])
         self.assertLessEqual(d2.max(), 1e-6)
         self.assertEqual(n + out["dropped_by_gate"] + out["dropped_in_padding"],
-                         out["network_matches"])
+                         out["candidates"])
         # Each argument given overrides its recorded value.
         tight = self.matcher.match(ia, ib, 8, 10, a.camera(), b.camera(), delta_px=2.0,
                                    snap_to_epipolar=False)
@@ -167,6 +167,17 @@ class Matching(unittest.TestCase):
         free = self.matcher.match(ia, ib, 8, 10, gate="none")
         self.assertEqual(free["F_source"], "none")
         self.assertEqual(free["dropped_by_gate"], 0)
+        # Exposed fields: a match with an end outside its field is dropped and counted.
+        left = np.zeros(ia.shape, np.uint8)
+        left[:, :ia.shape[1] // 2] = 1
+        inside = self.matcher.match(ia, ib, 8, 10, gate="none", field_a=left)
+        expected = np.rint(free["points_a"][:, 0]) < ia.shape[1] // 2
+        self.assertGreater(expected.sum(), 0)
+        self.assertLess(expected.sum(), len(expected))
+        np.testing.assert_array_equal(inside["points_a"], free["points_a"][expected])
+        self.assertEqual(inside["dropped_outside_field"], int((~expected).sum()))
+        with self.assertRaisesRegex(ValueError, "field_b is 3 x 2, its image"):
+            self.matcher.match(ia, ib, field_b=np.ones((2, 3), np.uint8))
         # Scored against the pair's labels: finite numbers.
         pair = gimm.label_pair(phantom()["centerlines"]["LCA"], a, b,
                                renderer().render(a)["vessel_mask"],
@@ -293,7 +304,7 @@ class Matching(unittest.TestCase):
         with self.assertRaisesRegex(ValueError, "both mask_a and mask_b, or neither"):
             gimm.match_geometric(image, image, a, b, mask_a=mask)
         small = np.ones((32, 32), np.float32)
-        with self.assertRaisesRegex(gimm.Error, "32 x 32"):
+        with self.assertRaisesRegex(gimm.Error, "camera A is 128x128 px, image A 32x32"):
             gimm.match_geometric(small, small, a, b)
         with self.assertRaisesRegex(gimm.Error, "tolerance"):
             gimm.match_geometric(image, image, a, b, tolerance_px=0.0)

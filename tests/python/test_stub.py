@@ -16,7 +16,8 @@ def stub():
 
 def params(node):
     a = node.args
-    return [p.arg for p in a.posonlyargs + a.args + a.kwonlyargs if p.arg != "self"]
+    names = [p.arg for p in a.posonlyargs + a.args + a.kwonlyargs if p.arg != "self"]
+    return names + (["**" + a.kwarg.arg] if a.kwarg else [])
 
 
 def documented_params(obj):

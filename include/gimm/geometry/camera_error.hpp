@@ -20,6 +20,12 @@ struct CameraError {
   double deg = 0;  ///< rotation error about each axis across the view, degrees
   double mm = 0;   ///< table / isocentre shift, mm
   bool none() const { return deg == 0 && mm == 0; }
+  void validate() const {
+    GIMM_CHECK(std::isfinite(deg) && deg >= 0 && deg <= 45,
+               "CameraError::deg must be in [0, 45] degrees, got " << deg);
+    GIMM_CHECK(std::isfinite(mm) && mm >= 0 && mm <= 1000,
+               "CameraError::mm must be in [0, 1000] mm, got " << mm);
+  }
 };
 
 /// The camera moved rigidly: its centre C -> pivot + Q (C - pivot) + shift, orientation R Q^T.

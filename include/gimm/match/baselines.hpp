@@ -13,6 +13,7 @@
 ///           no vessel in B give no match.
 #include <Eigen/Core>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -109,16 +110,29 @@ inline Rng baseline_stream(std::uint64_t seed, const std::string& method, const 
   return Rng(seed).fork(stable_hash(method + ":" + id));
 }
 
+namespace detail {
+/// A baseline's matches as a matcher's result: all it proposes is kept.
+template <class Make>
+PairMatchResult baseline_result(Make make) {
+  const auto start = std::chrono::steady_clock::now();
+  PairMatchResult r;
+  r.matches = make();
+  r.candidates = static_cast<int>(r.matches.size());
+  r.seconds = seconds_since(start);
+  return r;
+}
+}  // namespace detail
+
 /// The oracle behind the matcher interface (dataset mode: it reads the pair's labels).
 class OracleMatcher : public PairMatcher {
  public:
   OracleMatcher(double sigma_px, std::uint64_t seed) : sigma_(sigma_px), seed_(seed) {}
   std::string name() const override { return "oracle"; }
   bool needs_images() const override { return false; }
-  PairMatches match(const PairInput& pair) const override {
+  PairMatchResult run(const PairInput& pair) const override {
     GIMM_CHECK(pair.truth, "oracle: pair '" << pair.id << "' has no labels (dataset mode only)");
     Rng rng = baseline_stream(seed_, name(), pair.id);
-    return oracle_matches(*pair.truth, sigma_, rng);
+    return detail::baseline_result([&] { return oracle_matches(*pair.truth, sigma_, rng); });
   }
 
  private:
@@ -133,11 +147,11 @@ class EpipolarMatcher : public PairMatcher {
       : options_(options), seed_(seed) {}
   std::string name() const override { return "epipolar"; }
   bool needs_images() const override { return false; }
-  PairMatches match(const PairInput& pair) const override {
+  PairMatchResult run(const PairInput& pair) const override {
     GIMM_CHECK(pair.truth,
                "epipolar: pair '" << pair.id << "' has no masks and F (dataset mode only)");
     Rng rng = baseline_stream(seed_, name(), pair.id);
-    return epipolar_matches(*pair.truth, options_, rng);
+    return detail::baseline_result([&] { return epipolar_matches(*pair.truth, options_, rng); });
   }
 
  private:

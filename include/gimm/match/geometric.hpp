@@ -45,6 +45,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <future>
 #include <limits>
@@ -697,6 +698,11 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
 
 /// The geometric matcher behind the matcher interface. Needs both cameras; uses the pair's
 /// vessel masks in dataset mode when `use_masks`, else segments the images.
+/// The geometric matcher's result: every matcher's, and what it knows of each match.
+struct GeometricPairResult : PairMatchResult {
+  std::vector<GeometricMatch> points;
+};
+
 class GeometricMatcher : public PairMatcher {
  public:
   explicit GeometricMatcher(GeometricOptions options = {}) : options_(options) {}
@@ -709,24 +715,37 @@ class GeometricMatcher : public PairMatcher {
   std::string name() const override { return "geometric"; }
   // With masks it reads only them; segmenting, it reads the images.
   bool needs_images() const override { return !options_.use_masks; }
-  PairMatches match(const PairInput& pair) const override {
-    return to_pair_matches(pair.id, match_with_points(pair));
+  PairMatchResult run(const PairInput& pair) const override { return run_with_points(pair); }
+  /// run()'s result with each match's triangulated point, A branch and margin (`points`, in
+  /// the order of result.matches). The matches carry the cameras' F, the one they follow.
+  GeometricPairResult run_with_points(const PairInput& pair) const {
+    const auto start = std::chrono::steady_clock::now();
+    GeometricPairResult r;
+    r.points = match_with_points(pair);
+    r.matches = to_pair_matches(pair.id, r.points);
+    r.matches.F = fundamental_from_cameras(*pair.camera_a, *pair.camera_b);
+    r.matches.F_source = "cameras";
+    r.candidates = static_cast<int>(r.points.size());
+    r.seconds = detail::seconds_since(start);
+    return r;
   }
+  /// The matches with what the matcher knows of each: its triangulated point, A branch, margin.
   std::vector<GeometricMatch> match_with_points(const PairInput& pair) const {
     GIMM_CHECK(pair.camera_a && pair.camera_b,
                "geometric: pair '" << pair.id << "' has no cameras (the matcher needs both)");
-    const bool masks = options_.use_masks && pair.truth && pair.truth->mask_a && pair.truth->mask_b;
+    pair.validate();
+    const bool masks = options_.use_masks && pair.mask_a && pair.mask_b;
     GIMM_CHECK(masks || (pair.image_a && pair.image_b),
                "geometric: pair '" << pair.id << "' has neither masks nor images");
     const Eigen::Vector3d iso = pair_isocentre(*pair.camera_a, *pair.camera_b);
     ViewBufferPool::Lease buffers_a(*buffers_), buffers_b(*buffers_);
     std::future<VesselView> b_later =
         std::async(options_.two_threads ? std::launch::async : std::launch::deferred, [&] {
-          return vessel_view(pair.image_b, masks ? pair.truth->mask_b.get() : nullptr,
-                             *pair.camera_b, iso, options_, *buffers_b, pair.field_b);
+          return vessel_view(pair.image_b, masks ? pair.mask_b : nullptr, *pair.camera_b, iso,
+                             options_, *buffers_b, pair.field_b);
         });
-    const VesselView a = vessel_view(pair.image_a, masks ? pair.truth->mask_a.get() : nullptr,
-                                     *pair.camera_a, iso, options_, *buffers_a, pair.field_a);
+    const VesselView a = vessel_view(pair.image_a, masks ? pair.mask_a : nullptr, *pair.camera_a,
+                                     iso, options_, *buffers_a, pair.field_a);
     const VesselView b = b_later.get();
     return geometric_matches(a, b, options_);
   }

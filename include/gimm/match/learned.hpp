@@ -16,6 +16,7 @@
 /// gating removes the matches it rejects; soft and logit rescale confidences.
 #include <Eigen/Core>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -25,6 +26,7 @@
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/epipolar.hpp"
 #include "gimm/geometry/gating.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned_options.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
@@ -120,34 +122,62 @@ inline NetworkInput to_network_input(const Image<float>& image, int input_size,
   return in;
 }
 
-struct PairMatchResult {
-  PairMatches matches;               ///< image pixels, gated confidence
-  std::string fundamental_source;    ///< "cameras", "matches" or "none" (no gating)
-  std::optional<Eigen::Matrix3d> F;  ///< the F used for gating
-  int network_matches = 0;           ///< from the network, before padding and gating
-  int dropped_in_padding = 0;
-  int dropped_by_gate = 0;
-};
+/// The network's matches gated (options.gate) with the pair's F: the cameras' when the pair
+/// has them, else estimated from the matches (gate_reference); B points snapped onto their
+/// epipolar lines when asked. The result carries the F used and its source.
+inline PairMatches gate_matches(const PairMatches& raw, const PairInput& pair,
+                                const MatchOptions& options, int& dropped_by_gate) {
+  Points2<double> xa(2, raw.size()), xb(2, raw.size());
+  VectorX<double> conf(static_cast<Eigen::Index>(raw.size()));
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    xa.col(k) = raw.points_a[k];
+    xb.col(k) = raw.points_b[k];
+    conf(k) = raw.confidence[k];
+  }
+  GateResult<double> gated;
+  std::string source;
+  if (options.gate.mode == GateMode::none || raw.size() == 0) {
+    gated.confidence = conf;
+    gated.keep.assign(raw.size(), 1);
+  } else if (pair.camera_a) {
+    source = "cameras";
+    gated = gate_with_fundamental<double>(fundamental_from_cameras(*pair.camera_a, *pair.camera_b),
+                                          xa, xb, conf, options.gate);
+  } else {
+    gated = gate_reference<double>(xa, xb, conf, options.gate);
+    source = "matches";
+  }
+  PairMatches out;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    if (!gated.keep[k]) {
+      ++dropped_by_gate;
+      continue;
+    }
+    const Eigen::Vector2d b =
+        options.snap_to_epipolar && gated.F
+            ? foot_on_line(*gated.F * raw.points_a[k].homogeneous(), raw.points_b[k])
+            : raw.points_b[k];
+    out.add(raw.points_a[k], b, gated.confidence(Eigen::Index(k)));
+  }
+  // The matches carry the F they were gated with (written with them, drawn by --picture).
+  out.F = gated.F;
+  out.F_source = gated.F ? source : "";
+  return out;
+}
 
-inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>& image_a,
-                                  const Image<float>& image_b, int class_a, int class_b,
-                                  const std::optional<Camerad>& camera_a,
-                                  const std::optional<Camerad>& camera_b,
+/// The learned matcher on one pair: the network on both images, its matches back in image
+/// pixels, gated with the pair's F (the cameras', else estimated from the matches), then those
+/// with an end outside its exposed field dropped. Needs both images.
+inline PairMatchResult match_pair(const nn::Matcher& matcher, const PairInput& pair,
                                   const MatchOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   options.gate.validate();
   GIMM_CHECK(!options.snap_to_epipolar || options.gate.mode != GateMode::none,
              "snapping to the epipolar line needs an F: a gate other than none");
-  GIMM_CHECK(camera_a.has_value() == camera_b.has_value(),
-             "give both cameras or neither (only camera " << (camera_a ? "A" : "B") << " given)");
-  for (const char view : {'A', 'B'}) {
-    const auto& cam = view == 'A' ? camera_a : camera_b;
-    const Image<float>& image = view == 'A' ? image_a : image_b;
-    if (cam)
-      GIMM_CHECK(cam->rows() == image.rows() && cam->cols() == image.cols(),
-                 "camera " << view << " is for " << cam->cols() << "x" << cam->rows()
-                           << " images, image " << view << " is " << image.cols() << "x"
-                           << image.rows());
-  }
+  GIMM_CHECK(pair.image_a && pair.image_b, "learned: pair '" << pair.id << "' has no images");
+  pair.validate();
+  const Image<float>& image_a = *pair.image_a;
+  const Image<float>& image_b = *pair.image_b;
   NetworkInput a = to_network_input(image_a, options.input_size, "image A");
   NetworkInput b = to_network_input(image_b, options.input_size, "image B");
   if (a.tensor.shape() != b.tensor.shape()) {  // images of different sizes: one tensor size
@@ -156,10 +186,10 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
     a = to_network_input(image_a, options.input_size, "image A", rows, cols);
     b = to_network_input(image_b, options.input_size, "image B", rows, cols);
   }
-  const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, class_a, class_b);
+  const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, pair.class_a, pair.class_b);
 
   PairMatchResult result;
-  result.network_matches = static_cast<int>(net.i_ids.size());
+  result.candidates = static_cast<int>(net.i_ids.size());
   auto in_content = [](const std::array<float, 2>& p, const NetworkInput& in) {
     return p[0] >= -0.5f && p[1] >= -0.5f && p[0] <= in.content_cols - 1 + 0.5f &&
            p[1] <= in.content_rows - 1 + 0.5f;
@@ -175,42 +205,11 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const Image<float>
     }
     raw.add(to_image(net.points0[k], a), to_image(net.points1[k], b), net.coarse_confidence[k]);
   }
-
-  Points2<double> xa(2, raw.size()), xb(2, raw.size());
-  VectorX<double> conf(static_cast<Eigen::Index>(raw.size()));
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    xa.col(k) = raw.points_a[k];
-    xb.col(k) = raw.points_b[k];
-    conf(k) = raw.confidence[k];
-  }
-  GateResult<double> gated;
-  if (options.gate.mode == GateMode::none || raw.size() == 0) {
-    result.fundamental_source = "none";
-    gated.confidence = conf;
-    gated.keep.assign(raw.size(), 1);
-  } else if (camera_a) {
-    result.fundamental_source = "cameras";
-    gated = gate_with_fundamental<double>(fundamental_from_cameras(*camera_a, *camera_b), xa, xb,
-                                          conf, options.gate);
-  } else {
-    gated = gate_reference<double>(xa, xb, conf, options.gate);
-    result.fundamental_source = gated.F ? "matches" : "none";
-  }
-  result.F = gated.F;
-  for (std::size_t k = 0; k < raw.size(); ++k) {
-    if (!gated.keep[k]) {
-      ++result.dropped_by_gate;
-      continue;
-    }
-    const Eigen::Vector2d b =
-        options.snap_to_epipolar && result.F
-            ? foot_on_line(*result.F * raw.points_a[k].homogeneous(), raw.points_b[k])
-            : raw.points_b[k];
-    result.matches.add(raw.points_a[k], b, gated.confidence(Eigen::Index(k)));
-  }
-  // The matches carry the F they were gated with (written with them, drawn by --picture).
-  result.matches.F = result.F;
-  result.matches.F_source = result.F ? result.fundamental_source : "";
+  result.matches = gate_matches(raw, pair, options, result.dropped_by_gate);
+  result.matches.pair = pair.id;
+  result.dropped_outside_field =
+      static_cast<int>(drop_outside_fields(result.matches, pair.field_a, pair.field_b));
+  result.seconds = detail::seconds_since(start);
   return result;
 }
 
@@ -220,14 +219,8 @@ class LearnedMatcher : public PairMatcher {
   LearnedMatcher(nn::Matcher network, MatchOptions options)
       : network_(std::move(network)), options_(options) {}
   std::string name() const override { return "learned"; }
-  PairMatches match(const PairInput& pair) const override { return run(pair).matches; }
-  /// The matches with what the network and the gate did (counts, the F used).
-  PairMatchResult run(const PairInput& pair) const {
-    GIMM_CHECK(pair.image_a && pair.image_b, "learned: pair '" << pair.id << "' has no images");
-    PairMatchResult r = match_pair(network_, *pair.image_a, *pair.image_b, pair.class_a,
-                                   pair.class_b, pair.camera_a, pair.camera_b, options_);
-    r.matches.pair = pair.id;
-    return r;
+  PairMatchResult run(const PairInput& pair) const override {
+    return match_pair(network_, pair, options_);
   }
 
  private:

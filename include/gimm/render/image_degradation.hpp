@@ -26,9 +26,9 @@ struct ImageDegradation {
   bool none() const { return photons == 0 && blur_px == 0; }
   void validate() const {
     GIMM_CHECK(photons == 0 || (std::isfinite(photons) && photons >= 1),
-               "image degradation: photons must be 0 (no noise) or >= 1, got " << photons);
+               "ImageDegradation::photons must be 0 (no noise) or >= 1, got " << photons);
     GIMM_CHECK(std::isfinite(blur_px) && blur_px >= 0 && blur_px <= 16,
-               "image degradation: blur must be in [0, 16] px, got " << blur_px);
+               "ImageDegradation::blur_px must be in [0, 16] px, got " << blur_px);
   }
 };
 
