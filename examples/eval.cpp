@@ -21,47 +21,14 @@
 #include "cli_common.hpp"
 #include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/match/tree_file.hpp"
-#include "gimm/metrics/summary.hpp"
+#include "gimm/metrics/report.hpp"
 #include "gimm/metrics/tree_error.hpp"
 #include "gimm/metrics/user_truth.hpp"
+#include "gimm/pipeline/eval_run.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string k_label(long k) {
-  return k > 0 ? std::to_string(k) : "all";
-}
-
-struct PairRow {
-  std::string id;
-  gimm::Summary s;
-};
-
-std::vector<PairRow> worst_pairs(const std::vector<gimm::PairScore>& pairs, long k,
-                                 std::size_t count) {
-  std::vector<PairRow> rows;
-  for (const auto& p : pairs) {
-    gimm::SummaryBuilder b(k);
-    b.add(p);
-    rows.push_back({p.id, b.summary()});
-  }
-  // Worst first: nothing scored, then by descending mean 2D error; ties by id.
-  std::stable_sort(rows.begin(), rows.end(), [](const PairRow& a, const PairRow& b) {
-    const bool na = std::isnan(a.s.mean_px), nb = std::isnan(b.s.mean_px);
-    if (na != nb) return na;
-    return !na && a.s.mean_px > b.s.mean_px;
-  });
-  if (rows.size() > count) rows.resize(count);
-  return rows;
-}
-
-std::string breakdown_table(const std::string& title, const std::string& column,
-                            const std::map<std::string, gimm::Summary>& groups) {
-  std::string md = "\n### " + title + "\n\n" + gimm::markdown_header(column);
-  for (const auto& [key, s] : groups) md += gimm::markdown_row(key, s);
-  return md;
-}
 
 /// How a gnuplot script run in `folder` names `file`: by its name when it lies there (the script
 /// keeps working after the folder is moved into place), else by its absolute path.
@@ -116,101 +83,20 @@ void plot_topk(const std::vector<std::pair<fs::path, std::string>>& runs, const 
   gimm::write_file_atomic(png, run_gnuplot(script));
 }
 
-int evaluate(const std::string& dataset, const std::string& predictions, long top_k,
-             const std::string& out, std::string name, const std::string& split,
-             std::size_t worst_count) {
-  GIMM_CHECK(fs::is_directory(predictions),
-             "predictions directory '" << predictions << "' does not exist");
-  if (name.empty()) name = fs::path(predictions).lexically_normal().filename().string();
-  if (name.empty()) name = fs::path(predictions).lexically_normal().parent_path().filename();
-  gimm::DatasetReader reader(dataset);
-  const auto ids = reader.pair_ids(split);
-  GIMM_CHECK(!ids.empty(), "no pairs in '" << dataset << "' (split " << split << ")");
-  std::vector<gimm::PairScore> pairs;
-  std::size_t missing = 0;
-  for (const auto& id : ids) {
-    const gimm::PairTruth truth = reader.pair(id);
-    const fs::path file = gimm::matches_path(predictions, id);
-    if (!fs::exists(file)) {
-      ++missing;
-      pairs.push_back(gimm::missing_pair(truth));
-      continue;
-    }
-    pairs.push_back(gimm::score_pair(truth, gimm::read_matches(file)));
-  }
-  if (missing > 0)
+int evaluate(const std::string& dataset, const std::string& predictions, const gimm::EvalRun& run,
+             const std::string& out) {
+  const gimm::DatasetEvaluation e = gimm::evaluate_dataset(dataset, predictions, run);
+  if (!e.missing.empty())
     std::fprintf(stderr, "gimm-eval: warning: %zu of %zu pairs have no predictions file in %s\n",
-                 missing, ids.size(), predictions.c_str());
-
-  const gimm::Summary pooled = gimm::summarize(pairs, top_k);
-  const auto by_system =
-      gimm::summarize_by(pairs, top_k, [](const gimm::PairScore& p) { return p.system; });
-  const auto by_class =
-      gimm::summarize_by(pairs, top_k, [](const gimm::PairScore& p) { return p.class_pair; });
-  const auto worst = worst_pairs(pairs, top_k, worst_count);
-  const auto ks = gimm::curve_ks(pairs, top_k);
-
-  std::string md = "## " + name + " (top-K = " + k_label(top_k) + ", " +
-                   std::to_string(pairs.size()) + " pairs)\n\n" + gimm::markdown_header() +
-                   gimm::markdown_row(name, pooled);
-  std::string extra = breakdown_table("By system", "system", by_system) +
-                      breakdown_table("By view-class pair", "view classes", by_class);
-  std::string curve_md = "\n### Top-K curve\n\n" + gimm::markdown_header("K");
-  nlohmann::json curve = nlohmann::json::array();
-  std::string tsv = "# k\tprec_1px\tprec_3px\tprec_5px\tmean_px\tmean_mm\tcoverage\n";
-  for (long k : ks) {
-    const gimm::Summary s = gimm::summarize(pairs, k);
-    curve_md += gimm::markdown_row(k_label(k), s);
-    nlohmann::json j = gimm::to_json(s);
-    j["k"] = k > 0 ? nlohmann::json(k) : nlohmann::json("all");
-    curve.push_back(j);
-    if (k > 0)
-      tsv += std::to_string(k) + "\t" + gimm::fmt(s.prec[0], 6) + "\t" + gimm::fmt(s.prec[1], 6) +
-             "\t" + gimm::fmt(s.prec[2], 6) + "\t" + gimm::fmt(s.mean_px, 6) + "\t" +
-             gimm::fmt(s.mean_mm, 6) + "\t" + gimm::fmt(s.coverage, 6) + "\n";
-  }
-  std::string worst_md = "\n### Worst pairs (by mean 2D error; nothing scored first)\n\n" +
-                         gimm::markdown_header("pair");
-  nlohmann::json worst_json = nlohmann::json::array();
-  for (const auto& row : worst) {
-    worst_md += gimm::markdown_row(row.id, row.s);
-    nlohmann::json j = gimm::to_json(row.s);
-    j["pair"] = row.id;
-    worst_json.push_back(j);
-  }
-  std::cout << md << extra;
+                 e.missing.size(), e.pairs.size(), predictions.c_str());
+  std::cout << e.report.headline_md;
   if (out.empty()) return 0;
   // All or nothing: written under a staging folder and moved into `out` at the end, so a failure
   // (a full disk) leaves `out` as it was.
   gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {
-    nlohmann::json systems = nlohmann::json::object(), classes = nlohmann::json::object();
-    for (const auto& [k, s] : by_system) systems[k] = gimm::to_json(s);
-    for (const auto& [k, s] : by_class) classes[k] = gimm::to_json(s);
-    nlohmann::json per_pair = nlohmann::json::array();
-    for (const auto& p : pairs) {
-      gimm::SummaryBuilder b(top_k);
-      b.add(p);
-      nlohmann::json j = gimm::to_json(b.summary());
-      j["pair"] = p.id;
-      per_pair.push_back(j);
-    }
-    const nlohmann::json summary = {{"format", gimm::kEvalFormat},
-                                    {"method", name},
-                                    {"dataset", dataset},
-                                    {"predictions", predictions},
-                                    {"split", split},
-                                    {"top_k", top_k},
-                                    {"pooled", gimm::to_json(pooled)},
-                                    {"by_system", systems},
-                                    {"by_class_pair", classes},
-                                    {"topk_curve", curve},
-                                    {"worst_pairs", worst_json},
-                                    {"pairs", per_pair}};
-    gimm::write_json_file(dir / "summary.json", summary);
-    gimm::write_file_atomic(dir / "table.md", md + extra + curve_md + worst_md);
-    gimm::write_file_atomic(dir / "worst_pairs.md", worst_md.substr(1));
-    gimm::write_file_atomic(dir / "topk.tsv", tsv);
-    plot_topk({{dir / "topk.tsv", name}}, dir / "topk.png");
+    gimm::write_eval_report(dir, e.report);
+    plot_topk({{dir / "topk.tsv", e.report.summary.at("method").get<std::string>()}},
+              dir / "topk.png");
   });
   std::fprintf(stderr,
                "gimm-eval: wrote %s/{summary.json,table.md,worst_pairs.md,topk.tsv,topk.png}\n",
@@ -235,7 +121,7 @@ int compare(const std::vector<std::string>& runs, const std::string& out) {
     rows += gimm::markdown_row(summary.method, summary.pooled);
     methods.push_back(summary.method);
   }
-  md = "## Comparison (top-K = " + k_label(top_k) + ")\n\n" + gimm::markdown_header() + rows;
+  md = "## Comparison (top-K = " + gimm::k_label(top_k) + ")\n\n" + gimm::markdown_header() + rows;
   std::cout << md;
   if (out.empty()) return 0;
   std::vector<std::pair<fs::path, std::string>> curves;
@@ -267,18 +153,14 @@ int evaluate_user_truth(const std::vector<std::string>& truths,
     one.add(pairs.back());
     rows += gimm::markdown_row(truth.id, one.summary());
   }
-  const std::string md = "## Own truth (top-K = " + k_label(top_k) + ", " +
+  const std::string md = "## Own truth (top-K = " + gimm::k_label(top_k) + ", " +
                          std::to_string(pairs.size()) + " pairs, truth radius " +
                          gimm::fmt(radius, 1) + " px)\n\n" + gimm::markdown_header("pair") + rows +
                          gimm::markdown_row("pooled", gimm::summarize(pairs, top_k));
   std::cout << md;
   if (out.empty()) return 0;
   gimm::write_folder_all_or_nothing(out, [&](const fs::path& dir) {  // as in evaluate
-    gimm::write_json_file(dir / "summary.json",
-                          {{"format", gimm::kEvalFormat},
-                           {"method", "own truth"},
-                           {"top_k", top_k},
-                           {"pooled", gimm::to_json(gimm::summarize(pairs, top_k))}});
+    gimm::write_json_file(dir / "summary.json", gimm::eval_summary_json("own truth", top_k, pairs));
     gimm::write_file_atomic(dir / "table.md", md);
   });
   return 0;
@@ -397,6 +279,11 @@ int main(int argc, char** argv) {
     }
     GIMM_USAGE_CHECK(!dataset.empty() && !predictions.empty(),
                      "give --dataset and --predictions (or --compare RUN...)");
-    return evaluate(dataset, predictions, top_k, out, name, split, worst);
+    gimm::EvalRun run;
+    run.method = name;
+    run.top_k = top_k;
+    run.worst = worst;
+    run.split = split;
+    return evaluate(dataset, predictions, run, out);
   });
 }

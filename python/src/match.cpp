@@ -8,7 +8,9 @@
 #include "gimm/match/baselines.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/metrics/protocol.hpp"
+#include "gimm/metrics/report.hpp"
 #include "gimm/metrics/summary.hpp"
+#include "gimm/pipeline/eval_run.hpp"
 #include "gimm/metrics/user_truth.hpp"
 
 namespace gimm::python {
@@ -212,16 +214,9 @@ confidence, F, F_source) as Matcher.match does.)doc");
                                                         : "predictions[" + std::to_string(n) + "]");
           pairs.push_back(score_pair(t, p));
         }
-        nlohmann::json per_pair = nlohmann::json::array();
-        for (const auto& p : pairs) {
-          SummaryBuilder b(top_k);
-          b.add(p);
-          nlohmann::json j = to_json(b.summary());
-          j["pair"] = p.id;
-          per_pair.push_back(j);
-        }
-        const nlohmann::json out = {
-            {"top_k", top_k}, {"pooled", to_json(summarize(pairs, top_k))}, {"pairs", per_pair}};
+        const nlohmann::json out = {{"top_k", top_k},
+                                    {"pooled", to_json(summarize(pairs, top_k))},
+                                    {"pairs", pair_summaries_json(pairs, top_k)}};
         return parse_json(out);
       },
       py::arg("truth"), py::arg("predictions"), py::arg("top_k") = 20, py::arg("radius_px") = 3.0,
@@ -238,6 +233,45 @@ Matcher.match's output is one. top_k: the most confident matches kept per pair (
 Returns dict(top_k, pooled, pairs): pooled and per-pair summaries with the keys of gimm-eval's
 summary.json (prec_1px, prec_3px, prec_5px, mean_px, median_px, p90_px, mean_mm, ...,
 coverage, epipolar_*); undefined figures are None.)doc");
+  m.def(
+      "evaluate_dataset",
+      [](const std::filesystem::path& dataset, const std::filesystem::path& predictions,
+         const std::string& split, long top_k, const std::string& method, std::size_t worst,
+         const py::object& out) {
+        if (top_k < 0) throw py::value_error("evaluate_dataset: top_k must be >= 0 (0 = all)");
+        EvalRun run;
+        run.split = split;
+        run.top_k = top_k;
+        run.method = method;
+        run.worst = worst;
+        const std::filesystem::path dir =
+            out.is_none() ? std::filesystem::path() : std::filesystem::path(py::str(out).cast<std::string>());
+        // out must not be an input (its files would land among theirs).
+        check_outputs_not_inputs({{"out", dir}}, {{"dataset", dataset}, {"predictions", predictions}});
+        DatasetEvaluation e;
+        {
+          py::gil_scoped_release release;
+          e = evaluate_dataset(dataset, predictions, run);
+        }
+        if (!dir.empty()) {
+          write_folder_all_or_nothing(
+              dir, [&](const std::filesystem::path& staged) { write_eval_report(staged, e.report); });
+        }
+        py::dict d = parse_json(e.report.summary);
+        d["missing"] = e.missing;
+        return d;
+      },
+      py::arg("dataset"), py::arg("predictions"), py::kw_only(), py::arg("split") = "all",
+      py::arg("top_k") = 20, py::arg("method") = "", py::arg("worst") = 10,
+      py::arg("out") = py::none(), R"doc(
+Scores a dataset's predictions (predictions/<patient>/<pair>.json) as gimm-eval --dataset does
+(pipeline/eval_run.hpp): returns the gimm-eval/1 summary as a dict (format, method, top_k,
+pooled, by_system, by_class_pair, topk_curve, worst_pairs, pairs; undefined figures None) and
+missing (the pair ids without a predictions file, scored as pairs with no matches). split: 'all',
+'train', 'val', 'test'; top_k: matches kept per pair (0 = all); method: the name in the tables
+('' : the predictions folder's name); worst: worst pairs listed. out: a folder to write
+summary.json, table.md, worst_pairs.md and topk.tsv into, all or nothing (gimm-eval --out,
+without the chart).)doc");
   m.def(
       "read_user_truth",
       [](const std::filesystem::path& path, double radius_px) {

@@ -26,6 +26,7 @@
 #include "gimm/labels/view_list.hpp"
 #include "gimm/match/matches.hpp"
 #include "gimm/match/tree_file.hpp"
+#include "gimm/metrics/report.hpp"
 #include "gimm/metrics/summary.hpp"
 #include "gimm/metrics/user_truth.hpp"
 #include "gimm/nn/matcher_file.hpp"

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "gimm/match/baselines.hpp"
+#include "gimm/metrics/report.hpp"
 #include "gimm/metrics/summary.hpp"
 #include "gimm/pipeline/dataset.hpp"
 
@@ -103,4 +104,48 @@ TEST_CASE("Epipolar baseline on a phantom patient, through files", "[metrics]") 
   CHECK(f.scored == s.scored);
   CHECK(f.mean_px == Approx(s.mean_px).epsilon(1e-12));
   CHECK(f.mean_mm == Approx(s.mean_mm).epsilon(1e-12));
+}
+
+TEST_CASE("gimm-eval/1 report: pooled, groups and worst pairs from the scores; read back",
+          "[metrics]") {
+  // Exact oracle matches on every pair but one pair with none: the report's pooled row and its
+  // per-system and per-pair entries are the summaries of those scores, the empty pair is the
+  // worst, and the summary reads back through the one reader.
+  gimm::DatasetReader reader(small_dataset());
+  const auto ids = reader.pair_ids();
+  std::vector<gimm::PairScore> pairs;
+  for (const auto& id : ids) {
+    const auto truth = reader.pair(id);
+    gimm::Rng rng(3);
+    pairs.push_back(id == ids[4] ? gimm::missing_pair(truth)
+                                 : gimm::score_pair(truth, gimm::oracle_matches(truth, 0.0, rng)));
+  }
+  gimm::EvalRun run;
+  run.method = "oracle0";
+  run.top_k = 20;
+  run.worst = 3;
+  const gimm::EvalReport r = gimm::make_eval_report(pairs, run);
+  const nlohmann::json& s = r.summary;
+  CHECK(s.at("format") == "gimm-eval/1");
+  CHECK(s.at("pooled") == gimm::to_json(gimm::summarize(pairs, 20)));
+  CHECK(s.at("pooled").at("coverage").get<double>() == Approx(26.0 / 27.0));
+  CHECK(s.at("by_system").size() == 2);
+  CHECK(s.at("by_system").at("RCA").at("pairs") == 6);
+  REQUIRE(s.at("pairs").size() == ids.size());
+  CHECK(s.at("pairs")[4].at("pair") == ids[4]);
+  CHECK(s.at("pairs")[4].at("coverage") == 0.0);
+  REQUIRE(s.at("worst_pairs").size() == 3);
+  CHECK(s.at("worst_pairs")[0].at("pair") == ids[4]);  // nothing scored: listed first
+  CHECK(r.table_md.rfind(r.headline_md, 0) == 0);
+  CHECK(r.headline_md.find("| oracle0 | 1.000 |") != std::string::npos);
+  CHECK(r.worst_md.find("| " + ids[4] + " |") != std::string::npos);
+  CHECK(r.topk_tsv.rfind("# k\tprec_1px", 0) == 0);
+  const fs::path dir = fs::path(GIMM_TEST_TMP) / "metrics" / "report";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  gimm::write_eval_report(dir, r);
+  const gimm::EvalSummaryFile back = gimm::read_eval_summary(dir / "summary.json");
+  CHECK(back.method == "oracle0");
+  CHECK(back.top_k == 20);
+  CHECK(gimm::to_json(back.pooled) == s.at("pooled"));
 }

@@ -6,6 +6,7 @@
 
 #include "gimm/io/files.hpp"
 #include "gimm/metrics/protocol.hpp"
+#include "gimm/metrics/report.hpp"
 #include "gimm/metrics/summary.hpp"
 #include "gimm/metrics/tree_error.hpp"
 #include "gimm/metrics/user_truth.hpp"

@@ -95,6 +95,18 @@ class DatasetTest(unittest.TestCase):
             run(evaluate, "--dataset", self.root, "--predictions", pred, "--out", out)
             with open(os.path.join(out, "summary.json")) as f:
                 reference = json.load(f)["pooled"]
+            # evaluate_dataset is gimm-eval --dataset's job: the same summary, the same files.
+            ours = gimm.evaluate_dataset(self.root, pred)
+            self.assertEqual(ours.pop("missing"), [])
+            with open(os.path.join(out, "summary.json")) as f:
+                self.assertEqual(ours, json.load(f))
+            mine_out = tmp_path("dataset", "evalpy-" + method)
+            shutil.rmtree(mine_out, ignore_errors=True)
+            gimm.evaluate_dataset(self.root, pred, out=mine_out)
+            for name in ("summary.json", "table.md", "worst_pairs.md", "topk.tsv"):
+                with open(os.path.join(out, name), "rb") as a, \
+                        open(os.path.join(mine_out, name), "rb") as b:
+                    self.assertEqual(a.read(), b.read(), name)
             pooled = gimm.evaluate(truths, mine)["pooled"]
             for key, value in reference.items():
                 if value is None:
@@ -159,6 +171,24 @@ class DatasetTest(unittest.TestCase):
         with self.assertRaisesRegex(gimm.Error, "no pairs in"):
             gimm.match_dataset(self.root, out, "oracle", split="test")
         self.assertFalse(os.path.exists(out))  # nothing written by a refused run
+
+    def test_evaluate_dataset_names_what_is_missing_or_wrong(self):
+        pred = tmp_path("dataset", "pred-partial")
+        shutil.rmtree(pred, ignore_errors=True)
+        ids = self.ds.pair_ids()
+        gimm.match_dataset(self.root, pred, "oracle")
+        os.remove(os.path.join(pred, ids[0] + ".json"))
+        scored = gimm.evaluate_dataset(self.root, pred, top_k=0, method="oracle")
+        self.assertEqual(scored["missing"], [ids[0]])
+        self.assertEqual(scored["method"], "oracle")
+        self.assertEqual(scored["pooled"]["missing_pairs"], 1)
+        self.assertEqual(len(scored["pairs"]), len(ids))
+        with self.assertRaisesRegex(gimm.Error, "predictions directory .* does not exist"):
+            gimm.evaluate_dataset(self.root, tmp_path("dataset", "nothing-here"))
+        with self.assertRaisesRegex(ValueError, "top_k must be >= 0"):
+            gimm.evaluate_dataset(self.root, pred, top_k=-1)
+        with self.assertRaisesRegex(gimm.Error, "out"):
+            gimm.evaluate_dataset(self.root, pred, out=pred)  # out over the predictions
 
     def test_bad_input_is_named(self):
         with self.assertRaisesRegex(gimm.Error, "nowhere"):

@@ -228,53 +228,6 @@ inline Summary summary_from_json(const nlohmann::json& j) {
   return s;
 }
 
-/// gimm-eval/1: the summary.json gimm-eval writes (its "pooled" Summary, the method name and
-/// top-K; per-system, per-class-pair and per-pair tables beside them).
-constexpr const char* kEvalFormat = "gimm-eval/1";
-
-struct EvalSummaryFile {
-  std::string method;
-  long top_k = 0;  ///< 0: all matches
-  Summary pooled;
-};
-
-/// Reads an earlier run's summary.json (gimm-eval --compare), checking the format and the types
-/// of what it uses; a malformed file is a FormatError naming it and the key.
-inline EvalSummaryFile read_eval_summary(const std::filesystem::path& file,
-                                         const std::string& default_method = "") {
-  const nlohmann::json j = read_json_file(file);
-  const std::string where = file.string();
-  GIMM_CHECK_AS(
-      FormatError, j.is_object() && j.contains("format") && j.at("format") == kEvalFormat,
-      where << ": not a " << kEvalFormat << " summary (the summary.json an evaluation writes)");
-  GIMM_CHECK_AS(FormatError,
-                j.contains("top_k") && j.at("top_k").is_number_integer() &&
-                    j.at("top_k").get<std::int64_t>() >= 0,
-                where << ": 'top_k' must be a count (0: all), got "
-                      << (j.contains("top_k") ? j.at("top_k").dump() : std::string("nothing")));
-  GIMM_CHECK_AS(FormatError, j.contains("pooled") && j.at("pooled").is_object(),
-                where << ": 'pooled' must be an object");
-  EvalSummaryFile out;
-  out.top_k = static_cast<long>(j.at("top_k").get<std::int64_t>());
-  out.method = default_method;
-  if (j.contains("method")) {
-    GIMM_CHECK_AS(FormatError, j.at("method").is_string(),
-                  where << ": 'method' must be a string, got " << j.at("method").dump());
-    out.method = j.at("method").get<std::string>();
-  }
-  for (const auto& [key, value] : j.at("pooled").items())
-    GIMM_CHECK_AS(FormatError, value.is_number() || value.is_null(),
-                  where << ": pooled." << key << " must be a number, got " << value.dump());
-  for (const char* count :
-       {"pairs", "missing_pairs", "matches", "kept", "slots", "scored", "epipolar_count"})
-    GIMM_CHECK_AS(FormatError,
-                  !j.at("pooled").contains(count) || j.at("pooled").at(count).is_number_unsigned(),
-                  where << ": pooled." << count << " must be a count, got "
-                        << j.at("pooled").at(count).dump());
-  out.pooled = summary_from_json(j.at("pooled"));
-  return out;
-}
-
 /// "0.547", or "-" when undefined.
 inline std::string fmt(double v, int decimals = 3) {
   if (!std::isfinite(v)) return "-";
