@@ -652,6 +652,58 @@ inline nlohmann::json absent_system_record() {
           {"pairs", 0},       {"centerline_mm", 0.0}, {"dense_labels", 0}};
 }
 
+namespace detail {
+
+/// One coronary system of a patient (generate_patient): its centerlines (appended to `all`, whose
+/// branch indices the labels use), views and pair labels, written by `writer`; returns the
+/// system's record. A system the label does not have (allow_single_system) gets none of them.
+inline nlohmann::json generate_system(CoronarySystem system, const Volume<std::uint8_t>& mask,
+                                      std::int64_t voxels, const PatientVolumes& patient,
+                                      const PatientSource& src, const DatasetOptions& o,
+                                      const DenseTissue* dense, const DatasetWriter& writer,
+                                      CenterlineTree& all, PatientTimings& t, Stopwatch& stage) {
+  if (voxels == 0) return absent_system_record();
+  stage.lap();
+  SkeletonOptions so;
+  so.system = system;
+  so.min_spur_mm = o.min_spur_mm;
+  std::shared_ptr<const VesselSurface> tubes;
+  const CenterlineTree tree = o.phantom_tubes ? system_tubes(patient, system, src.id, tubes)
+                                              : extract_centerlines(mask, so, "patient " + src.id);
+  all.append(tree);
+  // Branch indices in the labels refer to centerlines.json (both systems).
+  const auto points = flatten_centerlines(all, system);
+  t.centerlines += stage.lap();
+  const ViewPlan plan = system_plan(system, o, src.id);
+  if (plan.views.empty())  // a view list that names the other system only
+    return system_record(voxels, plan, tree.length(), 0);
+  std::optional<IodineContrast> iodine;
+  if (o.form_angiogram) {
+    Rng rng = patient_stream(o, src.id, std::string("iodine:") + to_string(system));
+    iodine = randomize(o.iodine_ranges, rng);
+  }
+  const ViewRenderer renderer = system_renderer(patient.hu, mask, o, src.id, dense,
+                                                iodine ? &*iodine : nullptr, std::move(tubes));
+  (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
+  std::optional<ViewFormationStage> formation;
+  if (o.form_angiogram) {
+    formation.emplace(o.formation_ranges,
+                      patient_stream(o, src.id, std::string("formation:") + to_string(system)),
+                      *iodine);
+    add_catheter(*formation, patient, system, o, src.id);
+  }
+  const SystemViews views = render_system_views(
+      renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id), points, writer, src.id,
+      o.write_line_integrals, t, formation ? &*formation : nullptr);
+  t.views += stage.lap();
+  t.view_count += plan.views.size();
+  const std::size_t dense_total = label_system_pairs(plan, views, points, o, writer, src.id, t);
+  stage.lap();
+  return system_record(voxels, plan, tree.length(), dense_total);
+}
+
+}  // namespace detail
+
 /// Generates one patient into out/patients/<id>/ and returns its record (also written as
 /// done.json, last, with "run" added). The stage timings go to `timings` when given, never into
 /// the dataset (they vary run to run; the dataset is byte-reproducible). Throws on bad input (the
@@ -693,53 +745,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   t.attenuation += stage.lap();
   CenterlineTree all;
   for (const CoronarySystem system : {CoronarySystem::RCA, CoronarySystem::LCA}) {
-    const Volume<std::uint8_t>& mask = system == CoronarySystem::LCA ? split.lca : split.rca;
-    const std::int64_t voxels = system == CoronarySystem::LCA ? split.lca_voxels : split.rca_voxels;
-    if (voxels == 0) {  // a single-tree label (allow_single_system): no views, no pairs
-      record["systems"][to_string(system)] = absent_system_record();
-      continue;
-    }
-    stage.lap();
-    SkeletonOptions so;
-    so.system = system;
-    so.min_spur_mm = o.min_spur_mm;
-    std::shared_ptr<const VesselSurface> tubes;
-    const CenterlineTree tree = o.phantom_tubes
-                                    ? system_tubes(patient, system, src.id, tubes)
-                                    : extract_centerlines(mask, so, "patient " + src.id);
-    all.append(tree);
-    // Branch indices in the labels refer to centerlines.json (both systems).
-    const auto points = flatten_centerlines(all, system);
-    t.centerlines += stage.lap();
-    const ViewPlan plan = system_plan(system, o, src.id);
-    if (plan.views.empty()) {  // a view list that names the other system only
-      record["systems"][to_string(system)] = system_record(voxels, plan, tree.length(), 0);
-      continue;
-    }
-    std::optional<IodineContrast> iodine;
-    if (o.form_angiogram) {
-      Rng rng = patient_stream(o, src.id, std::string("iodine:") + to_string(system));
-      iodine = randomize(o.iodine_ranges, rng);
-    }
-    const ViewRenderer renderer =
-        system_renderer(patient.hu, mask, o, src.id, dense ? &*dense : nullptr,
-                        iodine ? &*iodine : nullptr, std::move(tubes));
-    (o.vessel_mode == VesselMode::mesh ? t.mesh : t.attenuation) += stage.lap();
-    std::optional<ViewFormationStage> formation;
-    if (o.form_angiogram) {
-      formation.emplace(o.formation_ranges,
-                        patient_stream(o, src.id, std::string("formation:") + to_string(system)),
-                        *iodine);
-      add_catheter(*formation, patient, system, o, src.id);
-    }
-    const SystemViews views = render_system_views(
-        renderer, plan, o.carm, vessel_isocenter(mask, "patient " + src.id), points, writer, src.id,
-        o.write_line_integrals, t, formation ? &*formation : nullptr);
-    t.views += stage.lap();
-    t.view_count += plan.views.size();
-    const std::size_t dense_total = label_system_pairs(plan, views, points, o, writer, src.id, t);
-    stage.lap();
-    record["systems"][to_string(system)] = system_record(voxels, plan, tree.length(), dense_total);
+    const bool lca = system == CoronarySystem::LCA;
+    record["systems"][to_string(system)] = detail::generate_system(
+        system, lca ? split.lca : split.rca, lca ? split.lca_voxels : split.rca_voxels, patient,
+        src, o, dense ? &*dense : nullptr, writer, all, t, stage);
   }
   stage.lap();
   writer.write_centerlines(src.id, to_json(all));

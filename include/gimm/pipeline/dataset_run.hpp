@@ -95,6 +95,106 @@ inline void write_run_files(const std::filesystem::path& out, const nlohmann::js
   if (reference) report(RunMessage::info, "reference layout -> " + layout.reference_dir().string());
 }
 
+namespace detail {
+
+/// What a run refuses before any work: an export from a shard, ids or views an export cannot
+/// name, a timings file inside the (byte-reproducible) dataset.
+inline void check_run(const std::vector<PatientSource>& sources, const DatasetOptions& options,
+                      const std::filesystem::path& out, const DatasetRunOptions& run) {
+  const Shard& shard = run.shard;
+  GIMM_CHECK(!shard.sharded() || run.export_format.empty(),
+             "an export (" << run.export_format << ") from shard " << shard.index << "/"
+                           << shard.count << ": export after merging the shards");
+  std::vector<std::string> ids;
+  for (const auto& s : sources) ids.push_back(s.id);
+  check_export_ids(run.export_format, ids);
+  check_export_views(run.export_format, options.to_json());
+  GIMM_CHECK(
+      run.timings_file.empty() || !path_is_within(run.timings_file, out),
+      "the timings file " << run.timings_file.string() << " lies inside the dataset "
+                          << out.string()
+                          << ": the dataset is byte-reproducible and wall-clock seconds are not; "
+                             "write them elsewhere");
+}
+
+/// The timings file, opened for appending (closed when none is asked for).
+inline std::ofstream open_timings(const std::filesystem::path& file) {
+  std::ofstream timings;
+  if (file.empty()) return timings;
+  timings.open(file, std::ios::app);
+  GIMM_CHECK_AS(WriteError, timings.good(),
+                "cannot open the timings file '" << file.string()
+                                                 << "' for appending: " << std::strerror(errno));
+  return timings;
+}
+
+/// Makes one patient and returns its manifest record: "failed" with the error when its input
+/// fails; a WriteError stops the run (rethrown after saying so).
+inline nlohmann::json make_patient(const PatientSource& src, const DatasetOptions& options,
+                                   const std::filesystem::path& out, const DatasetRunOptions& run,
+                                   const RunReporter& report, std::ofstream& timings,
+                                   DatasetRunSummary& summary) {
+  try {
+    PatientTimings t;
+    nlohmann::json record = generate_patient(src, options, out, &t);
+    summary.made += t;
+    if (!run.quiet) report(RunMessage::info, "patient " + src.id + ": " + t.summary());
+    if (timings.is_open()) {
+      nlohmann::json line = t.to_json();
+      line["id"] = src.id;
+      timings << line.dump() << "\n" << std::flush;
+      GIMM_CHECK_AS(WriteError, timings.good(),
+                    "cannot write the timings file '" << run.timings_file.string() << "'");
+    }
+    const std::string warning = dropped_voxels_warning(record, options);
+    if (!warning.empty()) report(RunMessage::warning, warning);
+    return record;
+  } catch (const WriteError&) {
+    // Every later write would fail the same way: recording this patient as failed would put a
+    // full disk into the manifest. Stop; the error names the file and the reason.
+    report(RunMessage::info, "patient " + src.id +
+                                 " not made: its files cannot be written; stopping (patients "
+                                 "finished so far are kept, and a rerun resumes after them)");
+    report(RunMessage::end, "");
+    throw;
+  } catch (const std::exception& e) {
+    ++summary.failed;
+    report(RunMessage::error, "patient " + src.id + " failed: " + e.what());
+    return {{"id", src.id}, {"status", "failed"}, {"error", e.what()}};
+  }
+}
+
+/// "done/total patients (resumed, failed), rate, ETA"; the rate counts the patients made in
+/// this run, not the ones found finished.
+inline std::string run_progress(std::size_t done, std::size_t total,
+                                const DatasetRunSummary& summary,
+                                std::chrono::steady_clock::time_point t0) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::size_t made = done - summary.resumed;
+  const double rate = made / std::max(s, 1e-9);
+  std::string eta = "?";
+  if (made > 0) eta = std::to_string(std::llround((total - done) / rate)) + " s";
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "%zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, ETA %s   ", done,
+                total, summary.resumed, summary.failed, rate, eta.c_str());
+  return line;
+}
+
+/// The views, pairs and dense labels of the patients made ("ok").
+inline void count_made(const nlohmann::json& patients, DatasetRunSummary& summary) {
+  summary.patients = patients.size();
+  for (const auto& p : patients)
+    if (p.value("status", "") == "ok")
+      for (const auto& [name, sys] : p["systems"].items()) {
+        summary.views += sys["views"].get<std::size_t>();
+        summary.pairs += sys["pairs"].get<std::size_t>();
+        summary.dense_labels += sys["dense_labels"].get<std::size_t>();
+      }
+}
+
+}  // namespace detail
+
 /// Makes the patients of `run.shard` among `sources` into `out` (see the file comment). A
 /// patient whose input fails is recorded as failed with its error; the others go on. A
 /// WriteError stops the run (the file comment says what it leaves).
@@ -104,21 +204,7 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
                                      const DatasetRunOptions& run) {
   namespace fs = std::filesystem;
   const Shard& shard = run.shard;
-  GIMM_CHECK(!shard.sharded() || run.export_format.empty(),
-             "an export (" << run.export_format << ") from shard " << shard.index << "/"
-                           << shard.count << ": export after merging the shards");
-  {
-    std::vector<std::string> ids;
-    for (const auto& s : sources) ids.push_back(s.id);
-    detail::check_export_ids(run.export_format, ids);
-    detail::check_export_views(run.export_format, options.to_json());
-  }
-  GIMM_CHECK(
-      run.timings_file.empty() || !path_is_within(run.timings_file, out),
-      "the timings file " << run.timings_file.string() << " lies inside the dataset "
-                          << out.string()
-                          << ": the dataset is byte-reproducible and wall-clock seconds are not; "
-                             "write them elsewhere");
+  detail::check_run(sources, options, out, run);
   assign_splits(sources, options);
   const DatasetLayout layout(out);
   CreatedFolders folders;  // removed again (while empty) if the run fails
@@ -128,76 +214,29 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
     write_file_atomic(probe, std::string("ok"));
     fs::remove(probe);
   }
-  std::ofstream timings;
-  if (!run.timings_file.empty()) {
-    timings.open(run.timings_file, std::ios::app);
-    GIMM_CHECK_AS(WriteError, timings.good(),
-                  "cannot open the timings file '" << run.timings_file.string()
-                                                   << "' for appending: " << std::strerror(errno));
-  }
+  std::ofstream timings = detail::open_timings(run.timings_file);
   std::vector<const PatientSource*> mine;
   for (std::size_t k = 0; k < sources.size(); ++k)
     if (static_cast<int>(k % shard.count) == shard.index) mine.push_back(&sources[k]);
   // Resuming: finished patients must have been made with these parameters; unfinished ones lose
   // their temporaries.
   remove_stale_run_temporaries(layout, shard);
-  std::vector<nlohmann::json> finished(mine.size());
+  std::vector<nlohmann::json> finished(mine.size());  // all checked before any work
   for (std::size_t m = 0; m < mine.size(); ++m)
     finished[m] = finished_patient(layout, mine[m]->id, patient_run(*mine[m], options));
-
   DatasetRunSummary summary;
   nlohmann::json patients = nlohmann::json::array();
   const auto t0 = std::chrono::steady_clock::now();
   const RunReporter report = run.report ? run.report : stderr_reporter(run.quiet);
-  std::size_t done = 0;
   for (std::size_t m = 0; m < mine.size(); ++m) {
-    const PatientSource* src = mine[m];
-    nlohmann::json record;
-    if (!finished[m].is_null()) {
-      record = finished[m];
+    nlohmann::json record = finished[m];
+    if (!record.is_null())
       ++summary.resumed;
-    } else {
-      try {
-        PatientTimings t;
-        record = generate_patient(*src, options, out, &t);
-        summary.made += t;
-        if (!run.quiet) report(RunMessage::info, "patient " + src->id + ": " + t.summary());
-        if (timings.is_open()) {
-          nlohmann::json line = t.to_json();
-          line["id"] = src->id;
-          timings << line.dump() << "\n" << std::flush;
-          GIMM_CHECK_AS(WriteError, timings.good(),
-                        "cannot write the timings file '" << run.timings_file.string() << "'");
-        }
-        const std::string warning = dropped_voxels_warning(record, options);
-        if (!warning.empty()) report(RunMessage::warning, warning);
-      } catch (const WriteError&) {
-        // Every later write would fail the same way: recording this patient as failed would put
-        // a full disk into the manifest. Stop; the error names the file and the reason.
-        report(RunMessage::info, "patient " + src->id +
-                                     " not made: its files cannot be written; stopping (patients "
-                                     "finished so far are kept, and a rerun resumes after them)");
-        report(RunMessage::end, "");
-        throw;
-      } catch (const std::exception& e) {
-        record = {{"id", src->id}, {"status", "failed"}, {"error", e.what()}};
-        ++summary.failed;
-        report(RunMessage::error, "patient " + src->id + " failed: " + e.what());
-      }
-    }
+    else
+      record = detail::make_patient(*mine[m], options, out, run, report, timings, summary);
     patients.push_back(record);
-    ++done;
-    // The rate counts the patients made in this run, not the ones found finished.
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::size_t made = done - summary.resumed;
-    const double rate = made / std::max(s, 1e-9);
-    std::string eta = "?";
-    if (made > 0) eta = std::to_string(std::llround((mine.size() - done) / rate)) + " s";
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "%zu/%zu patients (%zu resumed, %zu failed), %.3f patients/s, ETA %s   ", done,
-                  mine.size(), summary.resumed, summary.failed, rate, eta.c_str());
-    if (!run.quiet) report(RunMessage::progress, line);
+    if (!run.quiet)
+      report(RunMessage::progress, detail::run_progress(m + 1, mine.size(), summary, t0));
   }
   report(RunMessage::end, "");
   nlohmann::json manifest = {{"format", kDatasetFormat},
@@ -208,15 +247,8 @@ inline DatasetRunSummary run_dataset(std::vector<PatientSource> sources,
   if (shard.sharded()) manifest["shard"] = {{"index", shard.index}, {"count", shard.count}};
   write_run_files(out, manifest, shard, run.export_format, report);
   folders.keep();
-  summary.patients = patients.size();
   summary.manifest = layout.manifest(shard);
-  for (const auto& p : patients)
-    if (p.value("status", "") == "ok")
-      for (const auto& [name, sys] : p["systems"].items()) {
-        summary.views += sys["views"].get<std::size_t>();
-        summary.pairs += sys["pairs"].get<std::size_t>();
-        summary.dense_labels += sys["dense_labels"].get<std::size_t>();
-      }
+  detail::count_made(patients, summary);
   return summary;
 }
 

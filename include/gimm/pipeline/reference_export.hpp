@@ -174,11 +174,12 @@ struct RefView {
   Camerad camera;
 };
 
-inline RefView read_ref_view(const std::filesystem::path& views_dir, const std::string& name,
-                             int pair_view_class, const std::string& pair_where) {
+inline RefView read_ref_view(const DatasetLayout& layout, const std::string& patient,
+                             const std::string& name, int pair_view_class,
+                             const std::string& pair_where) {
   RefView v;
   v.file = name;
-  const std::filesystem::path path = views_dir / (name + ".camera.json");
+  const std::filesystem::path path = layout.view_camera(patient, name);
   const std::string where = path.string();
   const nlohmann::json j = read_json_file(path);
   v.camera = camera_from_json(j, where);
@@ -222,205 +223,224 @@ inline Image<Rgb8> read_ref_image(const std::filesystem::path& path, const Camer
   return out;
 }
 
-}  // namespace detail
+/// A patient the export writes: its id, split and reference token.
+struct RefPatient {
+  std::string id, split, token;
+};
 
-/// Converts the finished gimm dataset in `dataset_dir` (manifest.json, patients/<id>/...)
-/// into the reference layout under `out_dir` (see the file comment). Patients whose manifest
-/// status is not "ok" are skipped, as the reference skips samples it could not process.
-/// Existing files of the same names are replaced; nothing else in `out_dir` is touched. This
-/// overload takes the dataset's manifest as given (`mwhere` names it in errors): a run exports
-/// before it renames its manifest into place, so that the two appear together.
-inline void export_reference(const std::filesystem::path& dataset_dir,
-                             const nlohmann::json& manifest, const std::string& mwhere,
-                             const std::filesystem::path& out_dir) {
-  namespace fs = std::filesystem;
-  namespace rf = reference_format;
-  using nlohmann::json;
-  const DatasetLayout layout(dataset_dir);
+/// The patients whose manifest status is "ok", each id and split checked: a bad one fails
+/// before any file is written.
+inline std::vector<RefPatient> exportable_patients(const nlohmann::json& manifest,
+                                                   const std::string& mwhere) {
   check_dataset_format(manifest, mwhere);
-  rf::check_views_exportable(manifest.value("parameters", json()), mwhere);
-  const json& patients = json_field(manifest, "patients", mwhere);
+  reference_format::check_views_exportable(manifest.value("parameters", nlohmann::json()), mwhere);
+  const nlohmann::json& patients = json_field(manifest, "patients", mwhere);
   GIMM_CHECK_AS(FormatError, patients.is_array(),
                 mwhere << ": 'patients' must be an array, got " << patients.type_name());
-
-  json frames = json::array();
-  json spacing = json::object();
-  std::map<std::string, std::vector<std::string>> lists{{"train", {}}, {"val", {}}, {"test", {}}};
-  std::size_t total_pairs = 0, scenes = 0;
-
-  // Every record's id and split first: a bad one fails before any file is written.
-  std::vector<const json*> ok;
+  std::vector<RefPatient> out;
   std::vector<std::string> ids;
-  for (const json& record : patients) {
+  for (const nlohmann::json& record : patients) {
     const std::string status = record.is_object() ? record.value("status", "") : "";
     if (status != "ok") continue;
-    const std::string id = json_string(record, "id", mwhere);
-    const std::string pwhere = mwhere + " (patient '" + id + "')";
-    const std::string split = json_string(record, "split", pwhere);
-    GIMM_CHECK_AS(FormatError, lists.count(split),
-                  pwhere << ": 'split' must be train, val or test, got '" << split << "'");
-    ok.push_back(&record);
-    ids.push_back(id);
+    RefPatient p;
+    p.id = json_string(record, "id", mwhere);
+    const std::string pwhere = mwhere + " (patient '" + p.id + "')";
+    p.split = json_string(record, "split", pwhere);
+    GIMM_CHECK_AS(FormatError, p.split == "train" || p.split == "val" || p.split == "test",
+                  pwhere << ": 'split' must be train, val or test, got '" << p.split << "'");
+    p.token = reference_format::patient_token(p.id, pwhere);
+    out.push_back(p);
+    ids.push_back(p.id);
   }
-  rf::check_patient_ids(ids, mwhere);
-  for (const char* sub : {"images", "masks", "npz_scenes", "dense_labels"})
-    create_folders(out_dir / sub);
+  reference_format::check_patient_ids(ids, mwhere);
+  return out;
+}
 
-  for (const json* r : ok) {
-    const json& record = *r;
-    const std::string id = record["id"].get<std::string>();
-    const std::string pwhere = mwhere + " (patient '" + id + "')";
-    const std::string split = record["split"].get<std::string>();
-    const std::string token = rf::patient_token(id, pwhere);
+/// One pair of a patient with both views, as the export orders them.
+struct RefPair {
+  std::tuple<int, int, int> order;  ///< system (RCA first), class A, class B
+  std::filesystem::path file;
+  nlohmann::json labels;
+  RefView a, b;
+};
 
-    const fs::path views_dir = layout.views_dir(id);
-    const fs::path pairs_dir = layout.pairs_dir(id);
-    GIMM_CHECK_AS(IoError, fs::is_directory(pairs_dir),
-                  pwhere << ": '" << pairs_dir.string() << "' does not exist");
-    std::vector<fs::path> pair_files;
-    for (const auto& e : fs::directory_iterator(pairs_dir))
-      if (e.is_regular_file() && e.path().extension() == ".json") pair_files.push_back(e.path());
+/// The patient's pairs in the reference's order (RCA first, then by view classes); two files
+/// of one view pair are refused (the reference names a pair by its views).
+inline std::vector<RefPair> read_ref_pairs(const DatasetReader& reader, const RefPatient& patient,
+                                           const std::string& pwhere) {
+  const std::filesystem::path pairs_dir = reader.layout().pairs_dir(patient.id);
+  GIMM_CHECK_AS(IoError, std::filesystem::is_directory(pairs_dir),
+                pwhere << ": '" << pairs_dir.string() << "' does not exist");
+  std::vector<RefPair> pairs;
+  for (const std::string& stem : reader.pairs_of(patient.id)) {
+    RefPair p;
+    p.file = reader.layout().pair_labels(patient.id, stem);
+    const std::string where = p.file.string();
+    p.labels = reader.pair_json(patient.id + "/" + stem);
+    const std::string va = ref_view_name(p.labels, "view_a", where);
+    const std::string vb = ref_view_name(p.labels, "view_b", where);
+    p.a = read_ref_view(reader.layout(), patient.id, va, json_int(p.labels, "view_class_a", where),
+                        where);
+    p.b = read_ref_view(reader.layout(), patient.id, vb, json_int(p.labels, "view_class_b", where),
+                        where);
+    GIMM_CHECK_AS(FormatError, p.a.system == p.b.system && p.a.view_class != p.b.view_class,
+                  where << ": a pair needs two view classes of one system, got " << p.a.system
+                        << " '" << p.a.view_name << "' and " << p.b.system << " '" << p.b.view_name
+                        << "'");
+    p.order = {p.a.system == "RCA" ? 0 : 1, p.a.view_class, p.b.view_class};
+    pairs.push_back(std::move(p));
+  }
+  std::sort(pairs.begin(), pairs.end(),
+            [](const RefPair& x, const RefPair& y) { return x.order < y.order; });
+  for (std::size_t k = 1; k < pairs.size(); ++k)
+    GIMM_CHECK_AS(FormatError, pairs[k].order != pairs[k - 1].order,
+                  "'" << pairs[k - 1].file.string() << "' and '" << pairs[k].file.string()
+                      << "' are the same view pair (" << pairs[k].a.system << " "
+                      << pairs[k].a.view_name << " - " << pairs[k].b.view_name
+                      << "); the reference layout names a pair by its views");
+  return pairs;
+}
 
-    struct Pair {
-      std::tuple<int, int, int> order;  // system (RCA first), class A, class B
-      fs::path file;
-      json labels;
-      detail::RefView a, b;
-    };
-    std::vector<Pair> pairs;
-    for (const auto& file : pair_files) {
-      const std::string where = file.string();
-      Pair p;
-      p.file = file;
-      p.labels = read_json_file(file);
-      const std::string va = detail::ref_view_name(p.labels, "view_a", where);
-      const std::string vb = detail::ref_view_name(p.labels, "view_b", where);
-      p.a = detail::read_ref_view(views_dir, va, json_int(p.labels, "view_class_a", where), where);
-      p.b = detail::read_ref_view(views_dir, vb, json_int(p.labels, "view_class_b", where), where);
-      GIMM_CHECK_AS(FormatError, p.a.system == p.b.system && p.a.view_class != p.b.view_class,
-                    where << ": a pair needs two view classes of one system, got " << p.a.system
-                          << " '" << p.a.view_name << "' and " << p.b.system << " '"
-                          << p.b.view_name << "'");
-      p.order = {p.a.system == "RCA" ? 0 : 1, p.a.view_class, p.b.view_class};
-      pairs.push_back(std::move(p));
-    }
-    std::sort(pairs.begin(), pairs.end(),
-              [](const Pair& x, const Pair& y) { return x.order < y.order; });
-    for (std::size_t k = 1; k < pairs.size(); ++k)
-      GIMM_CHECK_AS(FormatError, pairs[k].order != pairs[k - 1].order,
-                    "'" << pairs[k - 1].file.string() << "' and '" << pairs[k].file.string()
-                        << "' are the same view pair (" << pairs[k].a.system << " "
-                        << pairs[k].a.view_name << " - " << pairs[k].b.view_name
-                        << "); the reference layout names a pair by its views");
-    if (pairs.empty()) continue;  // the reference writes no scene for a patient without pairs
+/// A pair's dense rows as index-aligned 2D/3D lists.
+struct RefPoints {
+  nlohmann::json a = nlohmann::json::array(), b = nlohmann::json::array(),
+                 world = nlohmann::json::array();
+};
 
-    json image_paths = json::array(), pair_infos = json::array();
-    json dense_pairs = json::object();
-    for (const Pair& p : pairs) {
-      const std::string where = p.file.string();
-      const std::string& sys = p.a.system;
-      const std::string name = rf::pair_name(sys, p.a.view_name, p.b.view_name);
-      const std::string file_a = rf::image_name(token, name, 'A');
-      const std::string file_b = rf::image_name(token, name, 'B');
-      for (const auto& [view, file] :
-           {std::pair<const detail::RefView*, std::string>{&p.a, file_a}, {&p.b, file_b}}) {
-        const fs::path src = views_dir / view->file;
-        write_png(out_dir / "images" / file,
-                  detail::read_ref_image(src.string() + ".png", view->camera, false));
-        write_png(out_dir / "masks" / file,
-                  detail::read_ref_image(src.string() + ".mask.png", view->camera, true));
-      }
+inline RefPoints ref_points(const RefPair& p) {
+  RefPoints out;
+  for (const Correspondence& c : dense_labels_from_json(p.labels, p.file.string())) {
+    out.a.push_back({c.a.x(), c.a.y()});
+    out.b.push_back({c.b.x(), c.b.y()});
+    out.world.push_back({c.world.x(), c.world.y(), c.world.z()});
+  }
+  return out;
+}
 
-      // Dense rows -> index-aligned 2D/3D lists; sparse indices -> per-image landmarks.
-      const std::vector<Correspondence> dense = dense_labels_from_json(p.labels, where);
-      json pts_a = json::array(), pts_b = json::array(), pts_3d = json::array();
-      for (const Correspondence& c : dense) {
-        pts_a.push_back({c.a.x(), c.a.y()});
-        pts_b.push_back({c.b.x(), c.b.y()});
-        pts_3d.push_back({c.world.x(), c.world.y(), c.world.z()});
-      }
-      const json& sparse = json_field(p.labels, "sparse", where);
-      GIMM_CHECK_AS(FormatError, sparse.is_array(),
-                    where << ": 'sparse' must be an array, got " << sparse.type_name());
-      json categories = json::array(), sparse_a = json::array(), sparse_b = json::array();
-      for (std::size_t k = 0; k < sparse.size(); ++k) {
-        const json& s = sparse[k];
-        GIMM_CHECK_AS(FormatError,
-                      s.is_number_integer() && s.get<long long>() >= 0 &&
-                          static_cast<std::size_t>(s.get<long long>()) < dense.size(),
-                      where << ": sparse entry " << k << " must index a dense row (0.."
-                            << dense.size() << "), got " << s.dump());
-        const std::size_t row = s.get<std::size_t>();
-        categories.push_back(sys + "_" + (k < 10 ? "0" : "") + std::to_string(k));
-        sparse_a.push_back(pts_a[row]);
-        sparse_b.push_back(pts_b[row]);
-      }
-      for (const auto& [side, pts] :
-           {std::pair<const char*, const json*>{"A", &sparse_a}, {"B", &sparse_b}})
-        frames.push_back(
-            {{"project", rf::kProject},
-             {"patient", token},
-             {"video_name", name + "_" + side},
-             {"study", rf::kStudy},
-             {"label",
-              {{"cip",
-                {{"multi_branch",
-                  {{"data", json::array({{{"categories", categories}, {"pts", *pts}}})}}}}}}}});
+/// The pair's two frame_export_old.json entries: its sparse labels as per-image landmarks.
+inline void add_ref_frames(const RefPair& p, const RefPoints& pts, const std::string& token,
+                           const std::string& name, nlohmann::json& frames) {
+  using nlohmann::json;
+  const std::string where = p.file.string();
+  const json& sparse = json_field(p.labels, "sparse", where);
+  GIMM_CHECK_AS(FormatError, sparse.is_array(),
+                where << ": 'sparse' must be an array, got " << sparse.type_name());
+  json categories = json::array(), sparse_a = json::array(), sparse_b = json::array();
+  for (std::size_t k = 0; k < sparse.size(); ++k) {
+    const json& s = sparse[k];
+    GIMM_CHECK_AS(FormatError,
+                  s.is_number_integer() && s.get<long long>() >= 0 &&
+                      static_cast<std::size_t>(s.get<long long>()) < pts.a.size(),
+                  where << ": sparse entry " << k << " must index a dense row (0.." << pts.a.size()
+                        << "), got " << s.dump());
+    const std::size_t row = s.get<std::size_t>();
+    categories.push_back(p.a.system + "_" + (k < 10 ? "0" : "") + std::to_string(k));
+    sparse_a.push_back(pts.a[row]);
+    sparse_b.push_back(pts.b[row]);
+  }
+  for (const auto& [side, landmarks] :
+       {std::pair<const char*, const json*>{"A", &sparse_a}, {"B", &sparse_b}})
+    frames.push_back(
+        {{"project", reference_format::kProject},
+         {"patient", token},
+         {"video_name", name + "_" + side},
+         {"study", reference_format::kStudy},
+         {"label",
+          {{"cip",
+            {{"multi_branch",
+              {{"data", json::array({{{"categories", categories}, {"pts", *landmarks}}})}}}}}}}});
+}
 
-      const json K1 = gimm::matrix_to_json(p.a.camera.K());
-      const json K2 = gimm::matrix_to_json(p.b.camera.K());
-      dense_pairs[rf::dense_key(sys, p.a.view_name, p.b.view_name)] = {
-          {"primary_A", p.a.primary_deg},
+/// The pair's dense-label entry: angles, points, intrinsics, and gimm's exact geometry.
+inline nlohmann::json ref_dense_entry(const RefPair& p, const RefPoints& pts,
+                                      const std::filesystem::path& dataset_dir) {
+  const std::string where = p.file.string();
+  return {{"primary_A", p.a.primary_deg},
           {"secondary_A", p.a.secondary_deg},
           {"primary_B", p.b.primary_deg},
           {"secondary_B", p.b.secondary_deg},
-          {"vessel_points_3d", pts_3d},
-          {"vessel_points_A", pts_a},
-          {"vessel_points_B", pts_b},
-          {"centerline_3d", pts_3d},
-          {"centerline_A", pts_a},
-          {"centerline_B", pts_b},
-          {"K1", K1},
-          {"K2", K2},
+          {"vessel_points_3d", pts.world},
+          {"vessel_points_A", pts.a},
+          {"vessel_points_B", pts.b},
+          {"centerline_3d", pts.world},
+          {"centerline_A", pts.a},
+          {"centerline_B", pts.b},
+          {"K1", matrix_to_json(p.a.camera.K())},
+          {"K2", matrix_to_json(p.b.camera.K())},
           {"gimm",
-           {{"source", fs::relative(p.file, dataset_dir).generic_string()},
+           {{"source", std::filesystem::relative(p.file, dataset_dir).generic_string()},
             {"camera_model", to_string(p.a.camera.model())},
             {"points_3d", "world mm (LPS), not voxel indices"},
-            {"P1", gimm::matrix_to_json(p.a.camera.P())},
-            {"P2", gimm::matrix_to_json(p.b.camera.P())},
+            {"P1", matrix_to_json(p.a.camera.P())},
+            {"P2", matrix_to_json(p.b.camera.P())},
             {"F", json_field(p.labels, "F", where)},
             {"F_convention", "x_B^T F x_A = 0, pixels"},
             {"view_class_A", p.a.view_class},
             {"view_class_B", p.b.view_class},
-            {"sparse", sparse}}}};
+            {"sparse", json_field(p.labels, "sparse", where)}}}};
+}
 
-      const std::size_t i = image_paths.size();
-      image_paths.push_back(file_a);
-      image_paths.push_back(file_b);
-      pair_infos.push_back({json::array({i, i + 1}), 1.0, json::array({0.0, 0.0, 0.0, 0.0})});
+/// Everything the export gathers over the patients before its last files.
+struct RefTotals {
+  nlohmann::json frames = nlohmann::json::array();
+  nlohmann::json spacing = nlohmann::json::object();
+  std::map<std::string, std::vector<std::string>> lists{{"train", {}}, {"val", {}}, {"test", {}}};
+  std::size_t pairs = 0, scenes = 0;
+};
+
+/// One patient's images, masks, scene and dense labels; its frames and list entry in `totals`.
+inline void export_ref_patient(const DatasetReader& reader, const RefPatient& patient,
+                               const std::string& mwhere, const std::filesystem::path& out_dir,
+                               RefTotals& totals) {
+  using nlohmann::json;
+  namespace rf = reference_format;
+  const std::string pwhere = mwhere + " (patient '" + patient.id + "')";
+  const std::vector<RefPair> pairs = read_ref_pairs(reader, patient, pwhere);
+  if (pairs.empty()) return;  // the reference writes no scene for a patient without pairs
+  json image_paths = json::array(), pair_infos = json::array(), dense_pairs = json::object();
+  for (const RefPair& p : pairs) {
+    const std::string name = rf::pair_name(p.a.system, p.a.view_name, p.b.view_name);
+    const std::string file_a = rf::image_name(patient.token, name, 'A');
+    const std::string file_b = rf::image_name(patient.token, name, 'B');
+    for (const auto& [view, file] :
+         {std::pair<const RefView*, std::string>{&p.a, file_a}, {&p.b, file_b}}) {
+      const DatasetLayout& layout = reader.layout();
+      write_png(out_dir / "images" / file,
+                read_ref_image(layout.view_image(patient.id, view->file), view->camera, false));
+      write_png(out_dir / "masks" / file,
+                read_ref_image(layout.view_mask(patient.id, view->file), view->camera, true));
     }
-
-    const std::size_t n = image_paths.size();
-    const json empty(n, "");
-    const std::string scene = rf::kScenePrefix + token;
-    write_json_file(out_dir / "npz_scenes" / (scene + ".json"),
-                    {{"image_paths", image_paths},
-                     {"depth_paths", empty},
-                     {"intrinsics", empty},
-                     {"poses", empty},
-                     {"pair_infos", pair_infos}},
-                    2);
-    write_json_file(out_dir / "dense_labels" / (rf::kDensePrefix + token + ".json"),
-                    {{"sample_id", id}, {"pairs", dense_pairs}}, -1);
-    spacing[token] = {1.0, 1.0, 1.0};
-    lists[split].push_back(scene);
-    total_pairs += pairs.size();
-    ++scenes;
+    const RefPoints pts = ref_points(p);
+    add_ref_frames(p, pts, patient.token, name, totals.frames);
+    dense_pairs[rf::dense_key(p.a.system, p.a.view_name, p.b.view_name)] =
+        ref_dense_entry(p, pts, reader.root());
+    const std::size_t i = image_paths.size();
+    image_paths.push_back(file_a);
+    image_paths.push_back(file_b);
+    pair_infos.push_back({json::array({i, i + 1}), 1.0, json::array({0.0, 0.0, 0.0, 0.0})});
   }
+  const json empty(image_paths.size(), "");
+  const std::string scene = rf::kScenePrefix + patient.token;
+  write_json_file(out_dir / "npz_scenes" / (scene + ".json"),
+                  {{"image_paths", image_paths},
+                   {"depth_paths", empty},
+                   {"intrinsics", empty},
+                   {"poses", empty},
+                   {"pair_infos", pair_infos}},
+                  2);
+  write_json_file(out_dir / "dense_labels" / (rf::kDensePrefix + patient.token + ".json"),
+                  {{"sample_id", patient.id}, {"pairs", dense_pairs}}, -1);
+  totals.spacing[patient.token] = {1.0, 1.0, 1.0};
+  totals.lists[patient.split].push_back(scene);
+  totals.pairs += pairs.size();
+  ++totals.scenes;
+}
 
-  write_json_file(out_dir / "frame_export_old.json", frames, -1);
-  write_json_file(out_dir / "voxel_spacing_dict.json", spacing, 2);
-  for (auto& [split, names] : lists) {
+/// The files over all patients: frames, spacing, split lists, black list, pairs per scene.
+inline void write_ref_totals(RefTotals& totals, const std::filesystem::path& out_dir) {
+  write_json_file(out_dir / "frame_export_old.json", totals.frames, -1);
+  write_json_file(out_dir / "voxel_spacing_dict.json", totals.spacing, 2);
+  for (auto& [split, names] : totals.lists) {
     std::sort(names.begin(), names.end());
     std::string text;
     for (const auto& s : names) text += s + "\n";
@@ -428,7 +448,29 @@ inline void export_reference(const std::filesystem::path& dataset_dir,
   }
   write_file_atomic(out_dir / "black_list.txt", std::string());
   write_file_atomic(out_dir / "npz_scenes" / "split_length.txt",
-                    std::to_string(scenes ? total_pairs / scenes : 0));
+                    std::to_string(totals.scenes ? totals.pairs / totals.scenes : 0));
+}
+
+}  // namespace detail
+
+/// Converts the finished gimm dataset in `dataset_dir` (manifest.json, patients/<id>/...)
+/// into the reference layout under `out_dir` (see the file comment). Patients whose manifest
+/// status is not "ok" are skipped, as the reference skips samples it could not process.
+/// Existing files of the same names are replaced; nothing else in `out_dir` is touched. This
+/// overload takes the dataset's manifest as given (`mwhere` names it in errors): a run exports
+/// before it renames its manifest into place, so that the two appear together. The patients'
+/// files are read through DatasetReader.
+inline void export_reference(const std::filesystem::path& dataset_dir,
+                             const nlohmann::json& manifest, const std::string& mwhere,
+                             const std::filesystem::path& out_dir) {
+  const std::vector<detail::RefPatient> patients = detail::exportable_patients(manifest, mwhere);
+  const DatasetReader reader(dataset_dir);
+  for (const char* sub : {"images", "masks", "npz_scenes", "dense_labels"})
+    create_folders(out_dir / sub);
+  detail::RefTotals totals;
+  for (const detail::RefPatient& patient : patients)
+    detail::export_ref_patient(reader, patient, mwhere, out_dir, totals);
+  detail::write_ref_totals(totals, out_dir);
 }
 
 /// export_reference of the dataset's manifest.json.
