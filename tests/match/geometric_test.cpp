@@ -454,6 +454,10 @@ TEST_CASE("Geometric matcher: a place where chains meet is reported once", "[mat
   const Eigen::Vector2d shared = branches.back().points.front();
   const auto matches = gimm::geometric_matches(va, vb, o);
   REQUIRE(matches.size() >= 20);
+  auto elsewhere = vb;  // the pair's isocentre is computed once: the views must agree on it
+  elsewhere.isocentre.x() += 1;
+  CHECK_THROWS_WITH(gimm::geometric_matches(va, elsewhere, o),
+                    Catch::Contains("different isocentres"));
   std::set<std::array<double, 4>> places;
   int at_shared = 0;
   for (const auto& m : matches) {
@@ -480,7 +484,8 @@ TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match
   };
   auto matches = gimm::geometric_matches(va, vb, o);
   REQUIRE(matches.size() >= 20);
-  const double scale = gimm::threshold_scale(scene.ca, scene.cb, o);
+  const double scale =
+      gimm::threshold_scale(scene.ca, scene.cb, gimm::pair_isocentre(scene.ca, scene.cb), o);
   for (const auto& m : matches) {
     const auto [n, at] = sample_of(m);
     const double r = va.graph.branches[static_cast<std::size_t>(m.branch)].radius_px[at];
@@ -541,15 +546,19 @@ TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match
 
 TEST_CASE("Geometric matcher: the thresholds scale with pixels per mm", "[match][geometric]") {
   gimm::GeometricOptions o;
+  const auto scale_at = [&](int px) {
+    const gimm::Camerad a = carm_camera(30, 0, px), b = carm_camera(-30, 0, px);
+    return gimm::threshold_scale(a, b, gimm::pair_isocentre(a, b), o);
+  };
   // The reference is the 256 px phantom geometry (1 mm pixels, SID 1000, SOD 750): scale 1.
   const gimm::Camerad a256 = carm_camera(30, 0, 256), b256 = carm_camera(-30, 0, 256);
-  CHECK(gimm::threshold_scale(a256, b256, o) == Approx(1.0));
+  CHECK(gimm::threshold_scale(a256, b256, gimm::pair_isocentre(a256, b256), o) == Approx(1.0));
   // Twice the pixels over the same field: twice the threshold; coarser images keep it.
-  CHECK(gimm::threshold_scale(carm_camera(30, 0, 512), carm_camera(-30, 0, 512), o) == Approx(2.0));
-  CHECK(gimm::threshold_scale(carm_camera(30, 0, 384), carm_camera(-30, 0, 384), o) == Approx(1.5));
-  CHECK(gimm::threshold_scale(carm_camera(30, 0, 128), carm_camera(-30, 0, 128), o) == 1.0);
+  CHECK(scale_at(512) == Approx(2.0));
+  CHECK(scale_at(384) == Approx(1.5));
+  CHECK(scale_at(128) == 1.0);
   o.reference_px_per_mm = 0;  // off: the thresholds as given
-  CHECK(gimm::threshold_scale(carm_camera(30, 0, 512), carm_camera(-30, 0, 512), o) == 1.0);
+  CHECK(scale_at(512) == 1.0);
   // A reference far below the images' raises the threshold past every margin.
   const TwoCurveScene scene;
   o.reference_px_per_mm = 1e-6;

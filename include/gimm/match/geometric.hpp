@@ -174,6 +174,9 @@ struct VesselView {
   CenterlineGraph2d graph;
   std::size_t catheter_chains = 0;  ///< chains dropped as catheter-like (catheter_cue.hpp)
   Camerad camera;
+  /// The pair's isocentre (pair_isocentre) the view was prepared at: its pixels per mm, the
+  /// depth the matcher's thresholds are scaled at. Computed once per pair.
+  Eigen::Vector3d isocentre = Eigen::Vector3d::Zero();
 };
 
 namespace detail {
@@ -526,6 +529,7 @@ inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_
   VesselView v;
   v.image = image;
   v.camera = camera;
+  v.isocentre = isocentre;
   GIMM_CHECK(image || mask, "geometric matcher: a view has neither an image nor a mask");
   const int rows = mask ? mask->rows() : image->rows(), cols = mask ? mask->cols() : image->cols();
   GIMM_CHECK(camera.rows() == rows && camera.cols() == cols,
@@ -598,9 +602,9 @@ class ViewBufferPool {
 
 /// How much finer than reference_px_per_mm the pair's images are at the isocentre (the mean of
 /// the two views), at least 1; 1 when reference_px_per_mm is 0.
-inline double threshold_scale(const Camerad& a, const Camerad& b, const GeometricOptions& o) {
+inline double threshold_scale(const Camerad& a, const Camerad& b, const Eigen::Vector3d& iso,
+                              const GeometricOptions& o) {
   if (o.reference_px_per_mm == 0) return 1.0;
-  const Eigen::Vector3d iso = pair_isocentre(a, b);
   const double px_per_mm = 0.5 * (detail::pixels_per_mm(a, iso) + detail::pixels_per_mm(b, iso));
   return std::max(1.0, px_per_mm / o.reference_px_per_mm);
 }
@@ -636,8 +640,10 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
              "geometric matcher: junction_mm must be >= 0 and junction_px > 0, junction_reach_px "
              ">= 0, got "
                  << o.junction_mm << ", " << o.junction_px << ", " << o.junction_reach_px);
+  GIMM_CHECK(a.isocentre == b.isocentre,
+             "geometric matcher: the two views were prepared at different isocentres");
   const Eigen::Matrix3d F = fundamental_from_cameras(a.camera, b.camera);
-  const Eigen::Vector3d iso = pair_isocentre(a.camera, b.camera);
+  const Eigen::Vector3d& iso = a.isocentre;
   const Eigen::Matrix3d Ft = F.transpose();
   std::future<std::vector<GeometricMatch>> ba_later =
       std::async(o.two_threads ? std::launch::async : std::launch::deferred,
@@ -689,7 +695,7 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
     m.confidence = m.margin * m.placement;
   }
   const double min_confidence = (segmented ? o.min_confidence_segmented : o.min_confidence) *
-                                threshold_scale(a.camera, b.camera, o);
+                                threshold_scale(a.camera, b.camera, iso, o);
   ab.erase(std::remove_if(ab.begin(), ab.end(),
                           [&](const GeometricMatch& m) { return m.margin < min_confidence; }),
            ab.end());
