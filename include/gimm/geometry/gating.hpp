@@ -28,21 +28,8 @@
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/correspondences.hpp"
 #include "gimm/geometry/epipolar.hpp"
-#include "gimm/geometry/gate_options.hpp"
-
-#ifdef GIMM_EXTERN_INSTANCES
-// gimm's own binaries compile the double gating below once (src/instances/gating.cpp), so a
-// declaration of the 8-point is all it needs here: a change to fundamental.hpp then recompiles
-// what uses it, not every file that gates (the learned matcher's; docs/performance.md).
-namespace gimm {
-template <class Scalar>
-std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
-                                               const Points2<Scalar>& x_b,
-                                               const VectorX<Scalar>& weights);
-}  // namespace gimm
-#else
 #include "gimm/geometry/fundamental.hpp"
-#endif
+#include "gimm/geometry/gate_options.hpp"
 
 namespace gimm {
 

@@ -114,10 +114,9 @@ Eigen::Matrix<Scalar, 3, 1> pair_isocentre(const Camera<Scalar>& a, const Camera
 }
 
 // gimm's own binaries compile the double instantiations once (src/instances/) and see them as
-// extern here: the decompositions are costly to compile, and the matchers' headers then need
-// only declarations of the rest (match/geometric.hpp, match/reconstruct.hpp), so a change here
-// does not recompile every file that matches. Consumers do not define GIMM_EXTERN_INSTANCES and
-// instantiate them as usual.
+// extern here: the decompositions are costly to compile. The switch decides about this
+// header's own bodies only; consumers do not define GIMM_EXTERN_INSTANCES and instantiate them
+// as usual.
 // The DLT (a dynamic-size SVD) takes as long to compile as the rest: a file of its own each.
 #define GIMM_TRIANGULATION_DLT_INSTANCES(EXTERN)                                      \
   EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> triangulate_dlt<double>( \

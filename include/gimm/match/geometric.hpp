@@ -60,27 +60,13 @@
 #include "gimm/core/image.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/epipolar.hpp"
+#include "gimm/geometry/triangulation.hpp"
 #include "gimm/match/catheter_cue.hpp"
 #include "gimm/match/centerline_graph.hpp"
 #include "gimm/match/epipolar_meetings.hpp"
 #include "gimm/match/field_of_view.hpp"
 #include "gimm/match/matcher.hpp"
 #include "gimm/match/vesselness.hpp"
-
-#ifdef GIMM_EXTERN_INSTANCES
-// gimm's own binaries compile the two below once (src/instances/triangulation.cpp): declaring
-// them keeps a change to geometry/triangulation.hpp from recompiling every file that matches
-// geometrically (docs/performance.md, "Build").
-namespace gimm {
-template <class Scalar>
-std::optional<Eigen::Matrix<Scalar, 3, 1>> two_ray_midpoint(const Ray<Scalar>& r1,
-                                                            const Ray<Scalar>& r2);
-template <class Scalar>
-Eigen::Matrix<Scalar, 3, 1> pair_isocentre(const Camera<Scalar>& a, const Camera<Scalar>& b);
-}  // namespace gimm
-#else
-#include "gimm/geometry/triangulation.hpp"
-#endif
 
 namespace gimm {
 

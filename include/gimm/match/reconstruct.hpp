@@ -16,24 +16,8 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/camera.hpp"
-#include "gimm/match/matches.hpp"
-
-#ifdef GIMM_EXTERN_INSTANCES
-// gimm's own binaries compile the two below once (src/instances/triangulation*.cpp): declaring
-// them keeps a change to geometry/triangulation.hpp from recompiling every matcher's command
-// line (docs/performance.md, "Build").
-namespace gimm {
-template <class Scalar>
-std::optional<Eigen::Matrix<Scalar, 3, 1>> triangulate_dlt(
-    const std::vector<Camera<Scalar>>& cameras,
-    const std::vector<Eigen::Matrix<Scalar, 2, 1>>& pixels);
-template <class Scalar>
-Scalar reprojection_error(const Camera<Scalar>& camera, const Eigen::Matrix<Scalar, 3, 1>& X,
-                          const Eigen::Matrix<Scalar, 2, 1>& pixel);
-}  // namespace gimm
-#else
 #include "gimm/geometry/triangulation.hpp"
-#endif
+#include "gimm/match/matches.hpp"
 
 namespace gimm {
 
