@@ -77,9 +77,9 @@ ParallelCompile("GIMM_BUILD_JOBS", default=1).install()
 
 module = Pybind11Extension(
     "gimm._gimm",
-    # dicom.cpp needs GDCM and the mesh mode Embree: CMake's build has them (GIMM_WITH_DICOM,
+    # bind_dicom.cpp needs GDCM and the mesh mode Embree: CMake's build has them (GIMM_WITH_DICOM,
     # GIMM_WITH_EMBREE), the wheel does not (its Renderer refuses vessels='mesh' by name).
-    sorted(str(p.relative_to(HERE)) for p in (HERE / "src").glob("*.cpp") if p.name != "dicom.cpp"),
+    sorted(str(p.relative_to(HERE)) for p in (HERE / "src").glob("*.cpp") if p.name != "bind_dicom.cpp"),
     include_dirs=[str(ROOT / "include"), generated_include(),
                   os.environ.get("EIGEN3_INCLUDE_DIR", "/usr/include/eigen3")],
     define_macros=[("EIGEN_DONT_PARALLELIZE", None), ("NDEBUG", None)],

@@ -1,8 +1,8 @@
 #pragma once
-// gimm-match's two matchers, each in a file of its own beside examples/match.cpp (the command
+// gimm-match's two matchers, each in a file of its own beside examples/gimm_match.cpp (the command
 // line, the dataset loop, DICOM): a change to the learned matcher's headers (the network, the
-// gating) recompiles learned.cpp, one to the geometric matcher's geometric.cpp, and neither the
-// other nor the command line (docs/performance.md, "Build time").
+// gating) recompiles match_learned.cpp, one to the geometric matcher's match_geometric.cpp, and
+// neither the other nor the command line (docs/performance.md, "Build time").
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -11,8 +11,8 @@
 #include "gimm/core/image.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/match/learned_options.hpp"
-#include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/pair_matcher.hpp"
 
 namespace gimm {
 struct GeometricOptions;
@@ -53,7 +53,7 @@ struct PairOutputs {
   std::chrono::steady_clock::time_point start;  ///< when gimm-match started, for its timings
 };
 
-/// A and B side by side with the matches drawn (match.cpp).
+/// A and B side by side with the matches drawn (picture.cpp).
 void write_picture(const std::string& path, const gimm::Image<float>& a,
                    const gimm::Image<float>& b, const gimm::PairMatches& matches);
 

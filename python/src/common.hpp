@@ -26,7 +26,7 @@
 #include "gimm/core/volume.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/geometry/camera.hpp"
-#include "gimm/match/matcher.hpp"
+#include "gimm/match/pair_matcher.hpp"
 #include "gimm/match/matches.hpp"
 
 namespace gimm::python {
@@ -347,7 +347,7 @@ inline const char* dtype_name(const Volume<std::int16_t>&) {
 }
 
 /// gimm.Volume: a float32 (CT, attenuation), int16 (CT) or uint8 (mask) volume and its geometry,
-/// over the caller's array when volume_in allows, holding the array (python/src/volumes.cpp).
+/// over the caller's array when volume_in allows, holding the array (python/src/bind_volumes.cpp).
 struct PyVolume {
   std::variant<VolumeInput<float>, VolumeInput<std::uint8_t>, VolumeInput<std::int16_t>> in;
 

@@ -82,8 +82,8 @@ TEST_CASE("Geometry in float: triangulation and the pair's isocentre agree with 
           "[geometry][float]") {
   const Scene s = scene();
   const gimm::Cameraf af = s.a.cast<float>(), bf = s.b.cast<float>();
-  const Eigen::Vector3f iso = gimm::pair_isocentre(af, bf);
-  CHECK((iso.cast<double>() - gimm::pair_isocentre(s.a, s.b)).norm() < 1e-3);
+  const Eigen::Vector3f iso = gimm::pair_isocenter(af, bf);
+  CHECK((iso.cast<double>() - gimm::pair_isocenter(s.a, s.b)).norm() < 1e-3);
   for (int k = 0; k < 60; k += 7) {
     const std::vector<Eigen::Vector2f> px = {s.xa.col(k).cast<float>(), s.xb.col(k).cast<float>()};
     const auto dlt = gimm::triangulate_dlt<float>({af, bf}, px);

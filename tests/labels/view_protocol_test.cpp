@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 #include <set>
 
-#include "gimm/labels/protocol.hpp"
+#include "gimm/labels/view_protocol.hpp"
 
 using namespace gimm;
 

@@ -390,7 +390,7 @@ struct TwoCurveScene {
   }
 
   std::vector<gimm::GeometricMatch> match(const gimm::GeometricOptions& o) const {
-    const auto iso = gimm::pair_isocentre(ca, cb);
+    const auto iso = gimm::pair_isocenter(ca, cb);
     return gimm::geometric_matches(gimm::vessel_view(nullptr, &ma, ca, iso, o),
                                    gimm::vessel_view(nullptr, &mb, cb, iso, o), o);
   }
@@ -416,7 +416,7 @@ TEST_CASE("Geometric matcher on an exact scene: matches on the true point", "[ma
   // The matcher must put each b within 2 px of the projection of the 3D point whose A
   // projection is a, and on a's epipolar line.
   const TwoCurveScene scene;
-  CHECK(gimm::pair_isocentre(scene.ca, scene.cb).norm() < 1e-6);
+  CHECK(gimm::pair_isocenter(scene.ca, scene.cb).norm() < 1e-6);
   const gimm::GeometricOptions o;
   const auto matches = scene.match(o);
   INFO("matches " << matches.size());
@@ -434,7 +434,7 @@ TEST_CASE("Geometric matcher: a place where chains meet is reported once", "[mat
   const TwoCurveScene scene;
   gimm::GeometricOptions o;
   o.min_confidence = 0;  // every match the DP makes
-  const auto iso = gimm::pair_isocentre(scene.ca, scene.cb);
+  const auto iso = gimm::pair_isocenter(scene.ca, scene.cb);
   auto va = gimm::vessel_view(nullptr, &scene.ma, scene.ca, iso, o);
   const auto vb = gimm::vessel_view(nullptr, &scene.mb, scene.cb, iso, o);
   auto& branches = va.graph.branches;
@@ -455,7 +455,7 @@ TEST_CASE("Geometric matcher: a place where chains meet is reported once", "[mat
   const auto matches = gimm::geometric_matches(va, vb, o);
   REQUIRE(matches.size() >= 20);
   auto elsewhere = vb;  // the pair's isocentre is computed once: the views must agree on it
-  elsewhere.isocentre.x() += 1;
+  elsewhere.isocenter.x() += 1;
   CHECK_THROWS_WITH(gimm::geometric_matches(va, elsewhere, o),
                     Catch::Contains("different isocentres"));
   std::set<std::array<double, 4>> places;
@@ -470,7 +470,7 @@ TEST_CASE("Geometric matcher: a place where chains meet is reported once", "[mat
 
 TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match][geometric]") {
   const TwoCurveScene scene;
-  const Eigen::Vector3d iso = gimm::pair_isocentre(scene.ca, scene.cb);
+  const Eigen::Vector3d iso = gimm::pair_isocenter(scene.ca, scene.cb);
   // The radius term alone: the placement of a match is exp(-r / rank_radius_px), r the A
   // radius at its sample (a flipped sign would rank wide vessels first).
   gimm::GeometricOptions o;
@@ -485,7 +485,7 @@ TEST_CASE("Geometric matcher: margins are thresholded, placement ranks", "[match
   auto matches = gimm::geometric_matches(va, vb, o);
   REQUIRE(matches.size() >= 20);
   const double scale =
-      gimm::threshold_scale(scene.ca, scene.cb, gimm::pair_isocentre(scene.ca, scene.cb), o);
+      gimm::threshold_scale(scene.ca, scene.cb, gimm::pair_isocenter(scene.ca, scene.cb), o);
   for (const auto& m : matches) {
     const auto [n, at] = sample_of(m);
     const double r = va.graph.branches[static_cast<std::size_t>(m.branch)].radius_px[at];
@@ -548,11 +548,11 @@ TEST_CASE("Geometric matcher: the thresholds scale with pixels per mm", "[match]
   gimm::GeometricOptions o;
   const auto scale_at = [&](int px) {
     const gimm::Camerad a = carm_camera(30, 0, px), b = carm_camera(-30, 0, px);
-    return gimm::threshold_scale(a, b, gimm::pair_isocentre(a, b), o);
+    return gimm::threshold_scale(a, b, gimm::pair_isocenter(a, b), o);
   };
   // The reference is the 256 px phantom geometry (1 mm pixels, SID 1000, SOD 750): scale 1.
   const gimm::Camerad a256 = carm_camera(30, 0, 256), b256 = carm_camera(-30, 0, 256);
-  CHECK(gimm::threshold_scale(a256, b256, gimm::pair_isocentre(a256, b256), o) == Approx(1.0));
+  CHECK(gimm::threshold_scale(a256, b256, gimm::pair_isocenter(a256, b256), o) == Approx(1.0));
   // Twice the pixels over the same field: twice the threshold; coarser images keep it.
   CHECK(scale_at(512) == Approx(2.0));
   CHECK(scale_at(384) == Approx(1.5));
@@ -612,7 +612,7 @@ TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {
   const int size = 64;
   const gimm::Camerad ca = carm_camera(30, 0, size), cb = carm_camera(-30, 0, size);
   gimm::GeometricOptions o;
-  const Eigen::Vector3d iso = gimm::pair_isocentre(ca, cb);
+  const Eigen::Vector3d iso = gimm::pair_isocenter(ca, cb);
   // No vessels: no matches, no error.
   const gimm::Image<std::uint8_t> empty(size, size, 0);
   const auto va = gimm::vessel_view(nullptr, &empty, ca, iso, o);
@@ -632,7 +632,7 @@ TEST_CASE("Geometric matcher: degenerate input", "[match][geometric]") {
   CHECK_THROWS_WITH(gimm::vessel_view(nullptr, &small, ca, iso, o),
                     Catch::Contains("64 x 64") && Catch::Contains("32 x 32"));
   // Parallel principal axes: no isocentre.
-  CHECK_THROWS_WITH(gimm::pair_isocentre(ca, ca), Catch::Contains("parallel"));
+  CHECK_THROWS_WITH(gimm::pair_isocenter(ca, ca), Catch::Contains("parallel"));
   // A vessel along the epipolar lines (its own line crosses it everywhere): the matches it gives
   // are ambiguous, so none is reported at the default confidence.
   const Eigen::Matrix3d F = gimm::fundamental_from_cameras(ca, cb);

@@ -9,7 +9,7 @@
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/match/geometric.hpp"
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 
 namespace fs = std::filesystem;
 
@@ -75,7 +75,7 @@ TEST_CASE("Segmentation recovers a rendered phantom's vessel mask", "[match][seg
       const gimm::Image<float> image = gimm::read_png_unit(layout.view_image(patient.id, v));
       const gimm::Image<std::uint8_t> mask = gimm::read_png8(layout.view_mask(patient.id, v));
       const gimm::VesselView seen =
-          gimm::vessel_view(&image, nullptr, cam, gimm::pair_isocentre(cam, camera(other)), {});
+          gimm::vessel_view(&image, nullptr, cam, gimm::pair_isocenter(cam, camera(other)), {});
       for (int r = 0; r < mask.rows(); ++r)
         for (int c = 0; c < mask.cols(); ++c) {
           const bool t = mask(r, c) > 0, s = seen.mask(r, c) > 0;

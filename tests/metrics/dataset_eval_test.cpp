@@ -9,7 +9,7 @@
 #include "gimm/match/baselines.hpp"
 #include "gimm/metrics/report.hpp"
 #include "gimm/metrics/summary.hpp"
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 
 namespace fs = std::filesystem;
 

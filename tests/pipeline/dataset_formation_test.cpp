@@ -10,7 +10,7 @@
 
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 #include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;

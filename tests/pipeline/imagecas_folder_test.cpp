@@ -6,7 +6,7 @@
 #include <fstream>
 #include <set>
 
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 
 namespace fs = std::filesystem;
 using namespace gimm;

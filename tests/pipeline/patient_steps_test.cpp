@@ -1,4 +1,4 @@
-// The named steps of generate_patient (pipeline/dataset.hpp) one by one: read_patient,
+// The named steps of generate_patient (pipeline/patient.hpp) one by one: read_patient,
 // system_renderer, render_system_views, label_system_pairs, vessel_isocenter,
 // view_camera_json, absent_system_record; and the pieces they stand on: CenterlineTree::append
 // (anatomy/centerlines.hpp) and crop_to_foreground (core/volume.hpp).
@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "gimm/io/nifti.hpp"
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 #include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;

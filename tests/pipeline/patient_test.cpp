@@ -8,8 +8,8 @@
 #include <set>
 
 #include "gimm/io/nifti.hpp"
-#include "gimm/pipeline/dataset.hpp"
 #include "gimm/pipeline/dataset_run.hpp"
+#include "gimm/pipeline/patient.hpp"
 #include "pipeline_fixtures.hpp"
 
 namespace fs = std::filesystem;

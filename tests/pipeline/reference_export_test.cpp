@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 #include "gimm/pipeline/reference_export.hpp"
 
 // Its own namespace: the tests are compiled as one file (tests/CMakeLists.txt).

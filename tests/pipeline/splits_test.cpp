@@ -3,7 +3,7 @@
 #include <map>
 #include <string>
 
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 
 using namespace gimm;
 

@@ -34,7 +34,7 @@ class RenderedPairsTest(unittest.TestCase):
         shutil.rmtree(root, ignore_errors=True)  # this build's files, never an earlier run's
         run(exe, "--phantom", 1, "--style", "drr", "--rows", 64, "--cols", 80, "--pixel", 3.0,
             "--seed", 3, "--out", root, "--quiet")
-        # The patient's seed (pipeline/dataset.hpp phantom_sources: seed * 1000003 + index) and
+        # The patient's seed (pipeline/patient.hpp phantom_sources: seed * 1000003 + index) and
         # the angles gimm-dataset drew for each view class.
         angles = {}
         for path in glob.glob(os.path.join(root, "patients", "*", "views", "*.camera.json")):

@@ -95,7 +95,7 @@ class DatasetLayout {
     return patients_dir() / (patient + patient_suffix_);
   }
   /// This layout with every patient's folder "<id><suffix>" instead of "<id>": where a patient is
-  /// made before it is renamed into place (pipeline/dataset.hpp, generate_patient).
+  /// made before it is renamed into place (pipeline/patient.hpp, generate_patient).
   DatasetLayout with_patient_suffix(const std::string& suffix) const {
     DatasetLayout staged = *this;
     staged.patient_suffix_ = suffix;

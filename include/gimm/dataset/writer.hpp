@@ -18,7 +18,7 @@
 #include "gimm/io/npy.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/labels/correspondence.hpp"
-#include "gimm/labels/protocol.hpp"
+#include "gimm/labels/view_protocol.hpp"
 
 namespace gimm {
 

@@ -2,8 +2,8 @@
 /// Fundamental-matrix estimation from point correspondences x_a[i] <-> x_b[i] (pixels),
 /// with the convention x_b^T F x_a = 0.
 ///
-/// - fundamental_8pt: the paper's weighted normalised 8-point (Hartley 1997; Yi et al. 2018).
-///   Unweighted = all weights 1.
+/// - fundamental_8pt: the paper's weighted normalised 8-point (Hartley 1997; Yi et al. 2018),
+///   in eight_point.hpp (the gate needs it alone). Unweighted = all weights 1.
 /// - fundamental_affine: the affine F of two orthographic (parallel-beam) views, by the Gold
 ///   Standard orthogonal regression (Hartley & Zisserman, alg. 14.1), weighted.
 /// - estimate_fundamental_ransac: MSAC with local optimisation around either solver.
@@ -28,111 +28,10 @@
 #include "gimm/core/error.hpp"
 #include "gimm/core/rng.hpp"
 #include "gimm/geometry/correspondences.hpp"
+#include "gimm/geometry/eight_point.hpp"
 #include "gimm/geometry/epipolar.hpp"
 
 namespace gimm {
-
-namespace detail {
-
-/// The paper's normalisation: weighted centroid mu, weighted mean distance d to it,
-/// s = sqrt(2) / d, T = [[s, 0, -s mu_x], [0, s, -s mu_y], [0, 0, 1]].
-/// Returns nullopt when all weighted points coincide (d = 0).
-template <class Scalar>
-std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
-                                                      const VectorX<Scalar>& w) {
-  const Scalar total = w.sum();
-  const Eigen::Matrix<Scalar, 2, 1> mu = (x * w) / total;
-  const Scalar d = ((x.colwise() - mu).colwise().norm() * w)(0) / total;
-  if (!(d > std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + mu.norm()))) return std::nullopt;
-  const Scalar s = std::sqrt(Scalar(2)) / d;
-  Matrix3<Scalar> T;
-  T << s, 0, -s * mu.x(),  //
-      0, s, -s * mu.y(),   //
-      0, 0, 1;
-  return T;
-}
-
-/// Smallest eigenvector of a symmetric PSD matrix, or nullopt when the smallest eigenvalue is
-/// not isolated (second-smallest below `rel_tol` times the largest): the solution is not unique.
-template <class Scalar, int N>
-std::optional<Eigen::Matrix<Scalar, N, 1>> unique_null_vector(const Eigen::Matrix<Scalar, N, N>& M,
-                                                              Scalar rel_tol) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<Scalar, N, N>> eig(M);
-  if (eig.info() != Eigen::Success) return std::nullopt;
-  const auto& lambda = eig.eigenvalues();  // ascending
-  if (!(lambda(N - 1) > 0) || !(lambda(1) > rel_tol * lambda(N - 1))) return std::nullopt;
-  return eig.eigenvectors().col(0);
-}
-
-template <class Scalar>
-Matrix3<Scalar> enforce_rank2(const Matrix3<Scalar>& F) {
-  Eigen::JacobiSVD<Matrix3<Scalar>> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix<Scalar, 3, 1> sigma = svd.singularValues();
-  sigma(2) = 0;
-  return svd.matrixU() * sigma.asDiagonal() * svd.matrixV().transpose();
-}
-
-/// Tolerance on the eigenvalue ratio for "unique solution": eigenvalues are squared singular
-/// values, so 1e3 eps ~ a singular-value ratio of sqrt(1e3 eps) (5e-7 in double).
-template <class Scalar>
-Scalar uniqueness_tolerance() {
-  return Scalar(1000) * std::numeric_limits<Scalar>::epsilon();
-}
-
-}  // namespace detail
-
-/// The paper's weighted normalised 8-point algorithm (gimm-paper.tex, Sec. "Epipolar Geometry
-/// Module"): rows a_i = [x'x, x'y, x', y'x, y'y, y', x, y, 1] on normalised points (x = x_a,
-/// x' = x_b), minimise ||W A f||^2 with W = diag(sqrt(w_i)) (the eigenvector of A^T W^2 A with
-/// the smallest eigenvalue), enforce rank 2 by SVD, denormalise F = T_b^T F~ T_a.
-/// f is F in row-major order, which is what the rows a_i pair with (the paper's "column-wise"
-/// wording notwithstanding).
-/// x_a, x_b: (2, N) pixels; weights: (N) >= 0, or empty for all ones.
-/// Returns the normalised F, or nullopt for a degenerate configuration (see the file comment).
-template <class Scalar>
-std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
-                                               const Points2<Scalar>& x_b,
-                                               const VectorX<Scalar>& weights) {
-  const bool weighted = weights.size() > 0;
-  const Eigen::Index n = x_a.cols();
-  const Eigen::Index positive = detail::check_correspondences<Scalar>(
-      "fundamental_8pt", x_a, x_b, weighted ? &weights : nullptr, 8);
-  if (positive < 8) return std::nullopt;
-  const VectorX<Scalar> w = weighted ? weights : VectorX<Scalar>::Ones(n);
-
-  const auto Ta = detail::weighted_normalization<Scalar>(x_a, w);
-  const auto Tb = detail::weighted_normalization<Scalar>(x_b, w);
-  if (!Ta || !Tb) return std::nullopt;
-
-  // Rows sqrt(w_i) a_i; M = A^T W^2 A accumulated as one (9, N) x (N, 9) product.
-  Eigen::Matrix<Scalar, 9, Eigen::Dynamic> At(9, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Scalar sa = (*Ta)(0, 0), sb = (*Tb)(0, 0);
-    const Scalar xa = sa * x_a(0, i) + (*Ta)(0, 2), ya = sa * x_a(1, i) + (*Ta)(1, 2);
-    const Scalar xb = sb * x_b(0, i) + (*Tb)(0, 2), yb = sb * x_b(1, i) + (*Tb)(1, 2);
-    const Scalar r = std::sqrt(w(i));
-    At.col(i) << r * xb * xa, r * xb * ya, r * xb, r * yb * xa, r * yb * ya, r * yb, r * xa, r * ya,
-        r;
-  }
-  Eigen::Matrix<Scalar, 9, 9> M = Eigen::Matrix<Scalar, 9, 9>::Zero();
-  M.template selfadjointView<Eigen::Lower>().rankUpdate(At);
-  M = M.template selfadjointView<Eigen::Lower>();
-  const auto f = detail::unique_null_vector<Scalar, 9>(M, detail::uniqueness_tolerance<Scalar>());
-  if (!f) return std::nullopt;
-  const Matrix3<Scalar> F_normalised = detail::enforce_rank2<Scalar>(
-      Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(f->data()));
-  const Matrix3<Scalar> F = Tb->transpose() * F_normalised * (*Ta);
-  if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
-  return normalize_fundamental(F);
-}
-
-/// The unweighted 8-point (every weight 1). An overload, not a default argument, so that
-/// gating.hpp can declare the weighted one alone (see there).
-template <class Scalar>
-std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
-                                               const Points2<Scalar>& x_b) {
-  return fundamental_8pt<Scalar>(x_a, x_b, VectorX<Scalar>());
-}
 
 /// Affine fundamental matrix F = [[0, 0, a], [0, 0, b], [c, d, e]] of two orthographic views:
 /// a x_b + b y_b + c x_a + d y_a + e = 0. Gold Standard: (a, b, c, d) is the direction of least
@@ -331,8 +230,6 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
 // gimm's own binaries compile them once (src/instances/) and see them as extern here.
 // Consumers do not define GIMM_EXTERN_INSTANCES and instantiate them as usual.
 #define GIMM_FUNDAMENTAL_INSTANCES(EXTERN)                                     \
-  EXTERN template std::optional<Matrix3<double>> fundamental_8pt<double>(      \
-      const Points2<double>&, const Points2<double>&, const VectorX<double>&); \
   EXTERN template std::optional<Matrix3<double>> fundamental_affine<double>(   \
       const Points2<double>&, const Points2<double>&, const VectorX<double>&); \
   EXTERN template RansacResult<double> estimate_fundamental_ransac<double>(    \

@@ -27,8 +27,8 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/correspondences.hpp"
+#include "gimm/geometry/eight_point.hpp"
 #include "gimm/geometry/epipolar.hpp"
-#include "gimm/geometry/fundamental.hpp"
 #include "gimm/geometry/gate_options.hpp"
 
 namespace gimm {

@@ -5,7 +5,7 @@
 ///   cameras alike: rows u P_3 - P_1 and v P_3 - P_2, each scaled to unit norm, smallest right
 ///   singular vector.
 /// - triangulate_midpoint: the point closest (least squares) to all viewing rays; for two views,
-///   the midpoint of the common perpendicular.
+///   the midpoint of the common perpendicular (two_rays.hpp: the same in closed form).
 /// Invalid input (fewer than 2 views, counts that differ, non-finite pixels) throws gimm::Error.
 /// Degenerate geometry (all rays parallel, or a solution at infinity) returns std::nullopt.
 #include <Eigen/Core>
@@ -17,6 +17,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/geometry/two_rays.hpp"
 
 namespace gimm {
 
@@ -90,29 +91,6 @@ Scalar reprojection_error(const Camera<Scalar>& camera, const Eigen::Matrix<Scal
   return (p.uv - pixel).norm();
 }
 
-/// Two views in closed form (no SVD): the midpoint of the common perpendicular of two rays,
-/// nullopt when they are parallel. The geometric matcher triangulates every candidate with it.
-template <class Scalar>
-std::optional<Eigen::Matrix<Scalar, 3, 1>> two_ray_midpoint(const Ray<Scalar>& r1,
-                                                            const Ray<Scalar>& r2) {
-  const Eigen::Matrix<Scalar, 3, 1> w0 = r1.origin - r2.origin;
-  const Scalar b = r1.direction.dot(r2.direction), d = r1.direction.dot(w0),
-               e = r2.direction.dot(w0);
-  const Scalar denom = 1 - b * b;
-  if (!(denom > Scalar(1e-12))) return std::nullopt;
-  const Scalar s = (b * e - d) / denom, t = (e - b * d) / denom;
-  return Scalar(0.5) * ((r1.origin + s * r1.direction) + (r2.origin + t * r2.direction));
-}
-
-/// The principal axes' closest point: the isocentre of a C-arm pair (for the magnification).
-template <class Scalar>
-Eigen::Matrix<Scalar, 3, 1> pair_isocentre(const Camera<Scalar>& a, const Camera<Scalar>& b) {
-  const auto centre = [](const Camera<Scalar>& c) { return c.ray(c.K()(0, 2), c.K()(1, 2)); };
-  const auto X = two_ray_midpoint(centre(a), centre(b));
-  GIMM_CHECK(X, "pair_isocentre: the two views look along parallel axes (no isocentre)");
-  return *X;
-}
-
 // gimm's own binaries compile the double instantiations once (src/instances/) and see them as
 // extern here: the decompositions are costly to compile. The switch decides about this
 // header's own bodies only; consumers do not define GIMM_EXTERN_INSTANCES and instantiate them
@@ -126,11 +104,8 @@ Eigen::Matrix<Scalar, 3, 1> pair_isocentre(const Camera<Scalar>& a, const Camera
       const std::vector<Camera<double>>&, const std::vector<Eigen::Matrix<double, 2, 1>>&); \
   EXTERN template double reprojection_error<double>(const Camera<double>&,                  \
                                                     const Eigen::Matrix<double, 3, 1>&,     \
-                                                    const Eigen::Matrix<double, 2, 1>&);    \
-  EXTERN template std::optional<Eigen::Matrix<double, 3, 1>> two_ray_midpoint<double>(      \
-      const Ray<double>&, const Ray<double>&);                                              \
-  EXTERN template Eigen::Matrix<double, 3, 1> pair_isocentre<double>(const Camera<double>&, \
-                                                                     const Camera<double>&);
+                                                    const Eigen::Matrix<double, 2, 1>&);
+
 #ifdef GIMM_EXTERN_INSTANCES
 GIMM_TRIANGULATION_DLT_INSTANCES(extern)
 GIMM_TRIANGULATION_INSTANCES(extern)

@@ -19,7 +19,7 @@
 #include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/io/files.hpp"
-#include "gimm/labels/protocol.hpp"
+#include "gimm/labels/view_protocol.hpp"
 #include "gimm/labels/views.hpp"
 
 namespace gimm {

@@ -23,8 +23,8 @@
 #include "gimm/core/hash.hpp"
 #include "gimm/core/rng.hpp"
 #include "gimm/dataset/reader.hpp"
-#include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/pair_matcher.hpp"
 
 namespace gimm {
 

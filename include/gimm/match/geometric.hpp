@@ -60,12 +60,12 @@
 #include "gimm/core/image.hpp"
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/epipolar.hpp"
-#include "gimm/geometry/triangulation.hpp"
+#include "gimm/geometry/two_rays.hpp"
 #include "gimm/match/catheter_cue.hpp"
 #include "gimm/match/centerline_graph.hpp"
 #include "gimm/match/epipolar_meetings.hpp"
 #include "gimm/match/field_of_view.hpp"
-#include "gimm/match/matcher.hpp"
+#include "gimm/match/pair_matcher.hpp"
 #include "gimm/match/vesselness.hpp"
 
 namespace gimm {
@@ -160,9 +160,9 @@ struct VesselView {
   CenterlineGraph2d graph;
   std::size_t catheter_chains = 0;  ///< chains dropped as catheter-like (catheter_cue.hpp)
   Camerad camera;
-  /// The pair's isocentre (pair_isocentre) the view was prepared at: its pixels per mm, the
+  /// The pair's isocentre (pair_isocenter) the view was prepared at: its pixels per mm, the
   /// depth the matcher's thresholds are scaled at. Computed once per pair.
-  Eigen::Vector3d isocentre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d isocenter = Eigen::Vector3d::Zero();
 };
 
 namespace detail {
@@ -396,7 +396,7 @@ std::vector<std::vector<double>> chain_min_marginals(const std::vector<std::size
 /// `from`, the DP's matches.
 inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, const VesselView& to,
                                                      const Eigen::Matrix3d& F,
-                                                     const Eigen::Vector3d& isocentre,
+                                                     const Eigen::Vector3d& isocenter,
                                                      const GeometricOptions& o) {
   std::vector<GeometricMatch> out;
   const bool with_intensity = from.image && to.image && o.w_intensity > 0;
@@ -421,7 +421,7 @@ inline std::vector<GeometricMatch> match_branches_dp(const VesselView& from, con
     line_meetings(to.graph.branches, &index, l, tol, d, meetings);
     for (const LineMeeting& mt : meetings) {
       const auto X = two_ray_midpoint(ray_a, to.camera.ray(mt.b.x(), mt.b.y()));
-      if (!X || (o.heart_radius_mm > 0 && (*X - isocentre).norm() > o.heart_radius_mm)) continue;
+      if (!X || (o.heart_radius_mm > 0 && (*X - isocenter).norm() > o.heart_radius_mm)) continue;
       const double rb = mt.radius_px, off = mt.distance_px / tol;
       detail::Candidate c{mt.b, *X, mt.chain, mt.along, 0, detail::pixels_per_mm(from.camera, *X)};
       c.unary = o.w_epipolar * off * off + o.w_radius * std::abs(ra - rb) / std::max({ra, rb, 1.0});
@@ -509,13 +509,13 @@ struct ViewBuffers {
 /// worked out in `buffers`.
 /// Vessels outside `field` (when given: the exposed field) are dropped before the centerlines.
 inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_t>* mask,
-                              const Camerad& camera, const Eigen::Vector3d& isocentre,
+                              const Camerad& camera, const Eigen::Vector3d& isocenter,
                               const GeometricOptions& o, ViewBuffers& buffers,
                               const Image<std::uint8_t>* field = nullptr) {
   VesselView v;
   v.image = image;
   v.camera = camera;
-  v.isocentre = isocentre;
+  v.isocenter = isocenter;
   GIMM_CHECK(image || mask, "geometric matcher: a view has neither an image nor a mask");
   const int rows = mask ? mask->rows() : image->rows(), cols = mask ? mask->cols() : image->cols();
   GIMM_CHECK(camera.rows() == rows && camera.cols() == cols,
@@ -527,23 +527,23 @@ inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_
   } else {
     SegmentationOptions seg = o.segmentation;
     if (o.scales_from_cameras)
-      seg.vesselness.scales_px = vessel_scales(detail::pixels_per_mm(camera, isocentre));
+      seg.vesselness.scales_px = vessel_scales(detail::pixels_per_mm(camera, isocenter));
     segment_vessels(*image, seg, v.mask, buffers.segmentation);
     v.segmented = true;
   }
   if (field) clear_outside(v.mask, *field);
   v.graph = centerline_graph(v.mask, o.min_branch_px, buffers.centerlines);
   if (v.segmented)
-    v.catheter_chains = drop_catheter_like_chains(v.graph, detail::pixels_per_mm(camera, isocentre),
+    v.catheter_chains = drop_catheter_like_chains(v.graph, detail::pixels_per_mm(camera, isocenter),
                                                   field, o.catheter);
   return v;
 }
 
 inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_t>* mask,
-                              const Camerad& camera, const Eigen::Vector3d& isocentre,
+                              const Camerad& camera, const Eigen::Vector3d& isocenter,
                               const GeometricOptions& o) {
   ViewBuffers buffers;
-  return vessel_view(image, mask, camera, isocentre, o, buffers);
+  return vessel_view(image, mask, camera, isocenter, o, buffers);
 }
 
 /// ViewBuffers kept between calls, lent one per view being worked on; safe to share between
@@ -626,10 +626,10 @@ inline std::vector<GeometricMatch> geometric_matches(const VesselView& a, const 
              "geometric matcher: junction_mm must be >= 0 and junction_px > 0, junction_reach_px "
              ">= 0, got "
                  << o.junction_mm << ", " << o.junction_px << ", " << o.junction_reach_px);
-  GIMM_CHECK(a.isocentre == b.isocentre,
+  GIMM_CHECK(a.isocenter == b.isocenter,
              "geometric matcher: the two views were prepared at different isocentres");
   const Eigen::Matrix3d F = fundamental_from_cameras(a.camera, b.camera);
-  const Eigen::Vector3d& iso = a.isocentre;
+  const Eigen::Vector3d& iso = a.isocenter;
   const Eigen::Matrix3d Ft = F.transpose();
   std::future<std::vector<GeometricMatch>> ba_later =
       std::async(o.two_threads ? std::launch::async : std::launch::deferred,
@@ -729,7 +729,7 @@ class GeometricMatcher : public PairMatcher {
     const bool masks = options_.use_masks && pair.mask_a && pair.mask_b;
     GIMM_CHECK(masks || (pair.image_a && pair.image_b),
                "geometric: pair '" << pair.id << "' has neither masks nor images");
-    const Eigen::Vector3d iso = pair_isocentre(*pair.camera_a, *pair.camera_b);
+    const Eigen::Vector3d iso = pair_isocenter(*pair.camera_a, *pair.camera_b);
     ViewBufferPool::Lease buffers_a(*buffers_), buffers_b(*buffers_);
     std::future<VesselView> b_later =
         std::async(options_.two_threads ? std::launch::async : std::launch::deferred, [&] {

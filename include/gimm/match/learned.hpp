@@ -28,8 +28,8 @@
 #include "gimm/geometry/gating.hpp"
 #include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned_options.hpp"
-#include "gimm/match/matcher.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/pair_matcher.hpp"
 #include "gimm/nn/matcher.hpp"
 
 namespace gimm {

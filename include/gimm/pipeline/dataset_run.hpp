@@ -37,7 +37,7 @@
 #include "gimm/core/progress.hpp"
 #include "gimm/dataset/run.hpp"
 #include "gimm/dataset/writer.hpp"
-#include "gimm/pipeline/dataset.hpp"
+#include "gimm/pipeline/patient.hpp"
 #include "gimm/pipeline/reference_export.hpp"
 #include "gimm/pipeline/run_report.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 /// Matching a whole dataset from C++ (or Python, gimm.match_dataset): every pair of a split of a
-/// gimm-dataset matched by one matcher (match/matcher.hpp) into OUT/<patient>/<pair>.json, the
+/// gimm-dataset matched by one matcher (match/pair_matcher.hpp) into OUT/<patient>/<pair>.json, the
 /// gimm-matches/1 predictions gimm-eval scores. gimm-match --dataset and gimm-baseline are flag
 /// parsing around match_dataset.
 ///
@@ -28,11 +28,11 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/geometry/camera_error.hpp"
-#include "gimm/geometry/triangulation.hpp"
+#include "gimm/geometry/two_rays.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/match/baselines.hpp"
-#include "gimm/match/matcher.hpp"
+#include "gimm/match/pair_matcher.hpp"
 #include "gimm/pipeline/run_report.hpp"
 #include "gimm/render/image_degradation.hpp"
 
@@ -129,7 +129,7 @@ inline void load_pair_input(const PairMatcher& matcher, const DatasetReader& rea
     input.camera_b = reader.camera(patient, truth.view_b);
     if (!options.camera_error.none()) {  // the matcher's cameras are off, the images are not
       Rng rng = baseline_stream(options.seed, "camera-error", id);
-      const Eigen::Vector3d pivot = pair_isocentre(*input.camera_a, *input.camera_b);
+      const Eigen::Vector3d pivot = pair_isocenter(*input.camera_a, *input.camera_b);
       input.camera_a = perturbed_camera(*input.camera_a, pivot, options.camera_error, rng);
       input.camera_b = perturbed_camera(*input.camera_b, pivot, options.camera_error, rng);
     }

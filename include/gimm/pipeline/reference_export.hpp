@@ -1,5 +1,5 @@
 #pragma once
-/// Export of a finished gimm dataset (pipeline/dataset.hpp) into the layout of the released
+/// Export of a finished gimm dataset (pipeline/patient.hpp) into the layout of the released
 /// reference dataset, so that the reference training and evaluation code reads gimm data.
 ///
 /// Layout written under the output directory (docs/dataset.md, "Reference export"):

@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--method", method,
                  "learned (the GIMM network) | geometric (epipolar DP, needs cameras) | epipolar "
-                 "| oracle (training-free, dataset mode; match/matcher.hpp)")
+                 "| oracle (training-free, dataset mode; match/pair_matcher.hpp)")
       ->check(CLI::IsMember({"learned", "epipolar", "oracle", "geometric"}))
       ->capture_default_str();
   app.add_option("--weights", weights,
@@ -294,7 +294,7 @@ int main(int argc, char** argv) {
     const auto start = std::chrono::steady_clock::now();
     options.gate.mode = gimm::parse_gate_mode(gate);
     // The learned matcher's weights (given or shipped) and the flags given for it; what no flag
-    // sets comes from the weights' record (examples/match/learned.cpp).
+    // sets comes from the weights' record (examples/match/match_learned.cpp).
     const auto learned_choice = [&] {
       gimm_match::LearnedChoice choice;
       choice.weights = weights.empty() ? gimm::cli::default_weights() : weights;

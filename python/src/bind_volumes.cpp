@@ -15,7 +15,7 @@
 #include "gimm/io/nifti.hpp"
 #include "gimm/io/png.hpp"
 #include "gimm/io/volume_file.hpp"
-#include "gimm/labels/protocol.hpp"
+#include "gimm/labels/view_protocol.hpp"
 #include "gimm/labels/views.hpp"
 
 namespace gimm::python {
@@ -422,7 +422,7 @@ branch_names, branch_systems ('LCA'/'RCA') and branch_parents (int32, -1 for a r
       },
       py::arg("system"), py::kw_only(), py::arg("mode") = "shared", py::arg("seed") = 0,
       py::arg("jitter_deg") = kViewJitterDeg, R"doc(
-The renders and pairs of one system, as gimm-dataset plans them (labels/protocol.hpp).
+The renders and pairs of one system, as gimm-dataset plans them (labels/view_protocol.hpp).
 system: 'LCA' or 'RCA'; mode: 'shared' (one view per routine class of the system, every pair of
 them: LCA 7 views / 21 pairs, RCA 4 / 6) or 'per_pair' (two fresh views for each pair).
 Returns dict(views: [dict(view_class, primary_deg, secondary_deg)], pairs: [(a, b)] indices
