@@ -17,6 +17,7 @@
 
 #include "gimm/io/files.hpp"
 #include "gimm/nn/matcher_file.hpp"
+#include "gimm/nn/tensor_pool.hpp"
 
 namespace {
 
@@ -96,6 +97,21 @@ void BM_MatchPair(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_MatchPair)->Arg(256)->Arg(384)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// The same pair with the engine keeping no activation between pairs (nn/tensor_pool.hpp at
+/// limit 0): each pair allocates and first-touches every activation again, as before the pool.
+void BM_MatchPairNoKeptTensors(benchmark::State& state) {
+  gimm::nn::TensorPool& pool = gimm::nn::TensorPool::instance();
+  pool.set_limit_bytes(0);
+  BM_MatchPair(state);
+  pool.set_limit_bytes(std::size_t{256} << 20);
+}
+BENCHMARK(BM_MatchPairNoKeptTensors)
+    ->Arg(256)
+    ->Arg(384)
+    ->Arg(512)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 

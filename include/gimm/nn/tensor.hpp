@@ -14,6 +14,7 @@
 
 #include "gimm/core/error.hpp"
 #include "gimm/core/huge_pages.hpp"
+#include "gimm/nn/tensor_pool.hpp"
 
 namespace gimm::nn {
 
@@ -47,9 +48,10 @@ inline std::int64_t shape_numel(const Shape& shape) {
 class Tensor {
  public:
   Tensor() = default;
-  /// Zero-filled tensor of the given shape.
+  /// Zero-filled tensor of the given shape, in a kept buffer when one fits (tensor_pool.hpp).
   explicit Tensor(Shape shape, float fill = 0.0f) : shape_(std::move(shape)) {
     const auto n = static_cast<std::size_t>(shape_numel(shape_));
+    data_ = TensorPool::instance().take(n);
     reserve_huge(data_, n);  // a large activation: huge pages before its first touch
     data_.assign(n, fill);
     update_strides();
@@ -61,6 +63,20 @@ class Tensor {
                "tensor: " << data_.size() << " values do not fill shape " << shape_string(shape_));
     update_strides();
   }
+  Tensor(const Tensor&) = default;
+  Tensor(Tensor&&) noexcept = default;
+  Tensor& operator=(const Tensor&) = default;
+  Tensor& operator=(Tensor&& other) noexcept {
+    if (this != &other) {
+      TensorPool::instance().give(std::move(data_));  // the storage replaced is kept
+      shape_ = std::move(other.shape_);
+      strides_ = std::move(other.strides_);
+      data_ = std::move(other.data_);
+    }
+    return *this;
+  }
+  /// The storage goes back to the pool (tensor_pool.hpp).
+  ~Tensor() { TensorPool::instance().give(std::move(data_)); }
 
   const Shape& shape() const { return shape_; }
   const Shape& strides() const { return strides_; }
