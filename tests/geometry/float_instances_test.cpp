@@ -1,12 +1,14 @@
 // The geometry's templates in float: gimm's own binaries compile the double instances once
 // (src/instances/, extern elsewhere), so float is what a consumer instantiates from the headers
 // alone. Each function compiles for float and agrees with its double answer to float precision.
+// Not here: RANSAC and the DLT in float, whose instantiation alone took 34 s of compiling (58
+// against 24 s for this file): too dear for the README's test command (docs/performance.md).
 #include <catch2/catch.hpp>
 #include <vector>
 
 #include "gimm/geometry/carm.hpp"
+#include "gimm/geometry/eight_point.hpp"
 #include "gimm/geometry/epipolar.hpp"
-#include "gimm/geometry/fundamental.hpp"
 #include "gimm/geometry/gating.hpp"
 #include "gimm/geometry/triangulation.hpp"
 
@@ -48,8 +50,7 @@ Eigen::Matrix3d normalised(const M& F) {
 
 }  // namespace
 
-TEST_CASE("Geometry in float: F, the 8-point, RANSAC and gating agree with double",
-          "[geometry][float]") {
+TEST_CASE("Geometry in float: F, the 8-point and gating agree with double", "[geometry][float]") {
   const Scene s = scene();
   const gimm::Cameraf af = s.a.cast<float>(), bf = s.b.cast<float>();
   const Eigen::Matrix3d F = gimm::fundamental_from_cameras(s.a, s.b);
@@ -63,12 +64,6 @@ TEST_CASE("Geometry in float: F, the 8-point, RANSAC and gating agree with doubl
   for (int k = 0; k < 60; ++k)  // every true pair on its epipolar line (float: 0.05 px)
     CHECK(gimm::symmetric_epipolar_distance_sq<float>(*F8, xa.col(k), xb.col(k)) < 0.05f * 0.05f);
 
-  gimm::RansacOptions ro;
-  ro.threshold_px = 0.5;
-  const gimm::RansacResult<float> r = gimm::estimate_fundamental_ransac<float>(xa, xb, ro);
-  REQUIRE(r.F);
-  CHECK(r.stats.num_inliers == 60);
-
   gimm::GateOptions go;
   go.delta_px = 1.0;
   const gimm::GateResult<float> g = gimm::gate_with_fundamental<float>(Ff, xa, xb, ones, go);
@@ -78,7 +73,7 @@ TEST_CASE("Geometry in float: F, the 8-point, RANSAC and gating agree with doubl
   CHECK((normalised(*ref.F) - normalised(F)).norm() < 1e-3);
 }
 
-TEST_CASE("Geometry in float: triangulation and the pair's isocentre agree with double",
+TEST_CASE("Geometry in float: the midpoint, reprojection and the pair's isocenter agree",
           "[geometry][float]") {
   const Scene s = scene();
   const gimm::Cameraf af = s.a.cast<float>(), bf = s.b.cast<float>();
@@ -86,12 +81,9 @@ TEST_CASE("Geometry in float: triangulation and the pair's isocentre agree with 
   CHECK((iso.cast<double>() - gimm::pair_isocenter(s.a, s.b)).norm() < 1e-3);
   for (int k = 0; k < 60; k += 7) {
     const std::vector<Eigen::Vector2f> px = {s.xa.col(k).cast<float>(), s.xb.col(k).cast<float>()};
-    const auto dlt = gimm::triangulate_dlt<float>({af, bf}, px);
     const auto mid = gimm::triangulate_midpoint<float>({af, bf}, px);
-    REQUIRE(dlt);
     REQUIRE(mid);
-    CHECK((dlt->cast<double>() - s.world[k]).norm() < 0.05);  // mm, float precision at ~750 mm
     CHECK((mid->cast<double>() - s.world[k]).norm() < 0.05);
-    CHECK(gimm::reprojection_error<float>(af, *dlt, px[0]) < 0.05f);
+    CHECK(gimm::reprojection_error<float>(af, *mid, px[0]) < 0.05f);
   }
 }
