@@ -43,11 +43,8 @@ int main(int argc, char** argv) {
                      "--max-points is for --method epipolar, not " << method);
     // PRED_DIR must not be the dataset (the predictions would land among its files).
     gimm::cli::refuse_outputs_over_inputs({{"--out", out}}, {{"--dataset", dataset}});
-    std::unique_ptr<gimm::PairMatcher> matcher;
-    if (method == "oracle")
-      matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
-    else
-      matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
+    const std::unique_ptr<gimm::PairMatcher> matcher =
+        gimm::baseline_matcher(method, sigma, epi, seed);
     // The baselines read the labels only: no cameras, no images or fields.
     gimm::MatchRunOptions run;
     run.split = split;

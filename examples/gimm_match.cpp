@@ -375,10 +375,7 @@ int main(int argc, char** argv) {
         matcher = gimm_match::geometric_matcher(geometric);
       } else {
         GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
-        if (method == "oracle")
-          matcher = std::make_unique<gimm::OracleMatcher>(sigma, seed);
-        else
-          matcher = std::make_unique<gimm::EpipolarMatcher>(epi, seed);
+        matcher = gimm::baseline_matcher(method, sigma, epi, seed);
       }
       gimm::MatchRunOptions run;
       run.split = split;

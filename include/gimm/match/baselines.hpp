@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -158,5 +159,15 @@ class EpipolarMatcher : public PairMatcher {
   EpipolarBaselineOptions options_;
   std::uint64_t seed_;
 };
+
+/// The baseline named `method` ("oracle": sigma_px; "epipolar": `epipolar`) behind the matcher
+/// interface, with its per-pair random streams seeded by `seed`.
+inline std::unique_ptr<PairMatcher> baseline_matcher(const std::string& method, double sigma_px,
+                                                     const EpipolarBaselineOptions& epipolar,
+                                                     std::uint64_t seed) {
+  if (method == "oracle") return std::make_unique<OracleMatcher>(sigma_px, seed);
+  GIMM_CHECK(method == "epipolar", "a baseline is 'oracle' or 'epipolar', got '" << method << "'");
+  return std::make_unique<EpipolarMatcher>(epipolar, seed);
+}
 
 }  // namespace gimm
