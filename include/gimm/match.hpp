@@ -8,5 +8,6 @@
 #include "gimm/match/learned.hpp"
 #include "gimm/match/learned_options.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/network_input.hpp"
 #include "gimm/match/pair_matcher.hpp"
 #include "gimm/match/vesselness.hpp"

@@ -254,12 +254,17 @@ class Matcher:
     def __init__(self, weights: Optional[_Path] = None) -> None: ...
     @property
     def input_size(self) -> int: ...
+    @property
+    def input(self) -> str: ...
     def match(self, image_a: np.ndarray, image_b: np.ndarray, class_a: int = 0, class_b: int = 0,
               camera_a: Optional[_CameraLike] = None, camera_b: Optional[_CameraLike] = None, *,
               gate: Optional[_Gate] = None, tau: float = 2.0, delta_px: Optional[float] = None,
               top_k: int = 256, min_matches: int = 32, input_size: Optional[int] = None,
               snap_to_epipolar: Optional[bool] = None, field_a: Optional[np.ndarray] = None,
               field_b: Optional[np.ndarray] = None) -> Dict[str, Any]: ...
+
+
+def network_image(image: np.ndarray, input: Literal["intensity", "vesselness"]) -> np.ndarray: ...
 
 
 def match_geometric(image_a: np.ndarray, image_b: np.ndarray, camera_a: _CameraLike,

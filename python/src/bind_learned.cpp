@@ -37,6 +37,23 @@ std::string default_weights() {
 }  // namespace
 
 void bind_learned(py::module_& m) {
+  m.def(
+      "network_image",
+      [](const py::handle& image, const std::string& input) {
+        Image<float> in = image_from<float>(image, Accept::real, "image");
+        const NetworkImage kind = network_image_kind(input);
+        Image<float> out;
+        {
+          py::gil_scoped_release release;
+          out = network_image(in, kind);
+        }
+        return adopt_image(std::move(out));
+      },
+      py::arg("image"), py::arg("input"), R"doc(
+What the learned matcher's network sees of an image already at the network's size
+(match/network_input.hpp): input 'intensity' returns it as float32, 'vesselness' returns
+1 - sqrt(vesselness) of its background-free log. tools/train calls this on every augmented
+image, so training and gimm-match see the same thing.)doc");
   py::class_<nn::Matcher>(m, "Matcher", R"doc(
 The GIMM learned matcher on gimm's CPU inference engine (match/learned.hpp, docs/matcher.md).
 
@@ -54,6 +71,9 @@ source tree the module was built from. Raises gimm.IoError / gimm.FormatError na
       .def_property_readonly(
           "input_size", [](const nn::Matcher& n) { return n.config().input_size; },
           "The longer image side (px) the weights were trained at; 0: not recorded")
+      .def_property_readonly(
+          "input", [](const nn::Matcher& n) { return n.config().input; },
+          "What the network sees of an image: 'intensity' or 'vesselness' (gimm.network_image)")
       .def(
           "match",
           [](const nn::Matcher& net, const py::handle& image_a, const py::handle& image_b,

@@ -131,5 +131,11 @@ if rendered:
     r1, _ = load_file(os.path.join(TMP, "rendered1", "last.safetensors"))
     assert max(float(abs(r0[k] - r1[k]).max()) for k in r0) == 0.0, "--rendered not deterministic"
     assert max(float(abs(r0[k] - a[k]).max()) for k in r0) > 0, "--rendered trained on the dataset"
+    # The vessel-enhanced input: trained through gimm.network_image, recorded in the weights, and
+    # read back by the C++ engine.
+    out = finish(train("vesselness", "--input", "vesselness", "--steps", "2"), "--input run")
+    assert '"input": "vesselness"' in out and "stopped at step 2" in out, out
+    weights = os.path.join(TMP, "vesselness", "last.safetensors")
+    assert gimm.Matcher(weights).input == "vesselness"
 print("train_test: 2 ranks stop together; resume is exact; --init starts from its weights"
       + ("; --rendered trains deterministically" if rendered else ""))

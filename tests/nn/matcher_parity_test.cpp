@@ -208,6 +208,18 @@ TEST_CASE("matcher weights: missing, extra and misshapen tensors are named", "[n
   CHECK_THROWS_WITH(with_gate(R"("hard")"), Catch::Contains("'gate' must be an object"));
   CHECK_THROWS_WITH(with_gate(R"({"mode": "hard", "delta": 4})"),
                     Catch::Contains("unknown key 'gate.delta'"));
+  // What the network sees: intensity when not recorded (files written before it existed),
+  // vesselness when recorded; anything else refused, naming it.
+  CHECK(gimm::nn::load_matcher(dir + "/nogate.safetensors").config().input == "intensity");
+  const auto with_input = [&](const std::string& input) {
+    meta["gimm_config"] = config.substr(0, config.rfind('}')) + ", \"input\": " + input + "}";
+    gimm::nn::write_safetensors(dir + "/input.safetensors", all, meta);
+    return gimm::nn::load_matcher(dir + "/input.safetensors");
+  };
+  CHECK(with_input(R"("vesselness")").config().input == "vesselness");
+  CHECK_THROWS_WITH(with_input(R"("edges")"),
+                    Catch::Contains("input must be intensity|vesselness, got 'edges'"));
+  CHECK_THROWS_WITH(with_input("3"), Catch::Contains("'input' has the wrong type"));
   // A key the reader does not know (a typo, a newer writer's setting) is refused, not ignored.
   meta["gimm_config"] = config.substr(0, config.rfind('}')) + ", \"treshold\": 0.3}";
   gimm::nn::write_safetensors(dir + "/typo.safetensors", all, meta);

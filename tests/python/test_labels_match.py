@@ -377,6 +377,24 @@ class Matching(unittest.TestCase):
         if cli("gimm-eval") is None:
             self.skipTest("gimm-eval not built (scored in Python only)")
 
+    def test_network_image(self):
+        # What the network sees (match/network_input.hpp): the shipped weights see intensities;
+        # the vessel-enhanced input keeps a dark line and drops a dark step.
+        self.assertEqual(self.matcher.input, "intensity")
+        image = np.full((64, 64), 0.8, np.float32)
+        image[:, :24] = 0.35
+        image[:, 39:42] *= 0.5
+        same = gimm.network_image(image, "intensity")
+        self.assertEqual(same.dtype, np.float32)
+        np.testing.assert_array_equal(same, image)
+        enhanced = gimm.network_image(image.astype(np.float64), "vesselness")
+        self.assertEqual(enhanced.shape, (64, 64))
+        self.assertLess(enhanced[40, 40], 0.05)
+        self.assertGreater(enhanced[40, 10], 0.9)
+        self.assertGreater(enhanced[40, 23], 0.8)
+        with self.assertRaisesRegex(gimm.Error, "intensity\\|vesselness, got 'edges'"):
+            gimm.network_image(image, "edges")
+
     def test_bad_images(self):
         image = np.ones((128, 128), np.float32)
         with self.assertRaisesRegex(TypeError, r"image_a: .* got uint8 .*image / 255"):

@@ -75,6 +75,16 @@ def resize_for_network(image, size):
     return out, w / cols, h / rows
 
 
+def network_image(image, kind):
+    """What the network sees of `image` ([h, w] tensor at network size): itself for
+    'intensity'; for 'vesselness' gimm's own enhancement (include/gimm/match/network_input.hpp,
+    through the gimm module, so that training and gimm-match compute the same thing)."""
+    if kind == "intensity":
+        return image
+    import gimm  # needed for this input only
+    return torch.from_numpy(gimm.network_image(image.float().numpy(), kind))
+
+
 class PairSample:
     """One view pair at network resolution: images, masks, classes and dense labels."""
 

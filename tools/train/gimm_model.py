@@ -39,12 +39,15 @@ DEFAULT_CONFIG = {
     "border": 1,                       # coarse cells dropped at each image border
     "window": 5,                       # fine window (odd)
     "anchor": True,                    # refine the A-side point inside its window too
+    "input": "intensity",              # what the network sees: intensity | vesselness
 }
 
 # Keys a weights file written before they existed may lack, with the value that reproduces it.
-BACKWARD_DEFAULTS = {"anchor": False}
+BACKWARD_DEFAULTS = {"anchor": False, "input": "intensity"}
 # Keys set after training (export.py --input-size, record_gate.py), read by the C++ engine.
 OPTIONAL_KEYS = ("input_size", "gate")
+# What the network sees of an image (include/gimm/match/network_input.hpp, gimm.network_image).
+NETWORK_INPUTS = ("intensity", "vesselness")
 
 
 def validate_config(cfg):
@@ -69,6 +72,9 @@ def validate_config(cfg):
     for layer in cfg["coarse_layers"] + cfg["fine_layers"]:
         if layer not in ("self", "cross"):
             raise ValueError(f"matcher config: layer kind must be self|cross, got {layer!r}")
+    if cfg["input"] not in NETWORK_INPUTS:
+        raise ValueError(f"matcher config: input must be one of {NETWORK_INPUTS}, "
+                         f"got {cfg['input']!r}")
     if cfg["window"] < 1 or cfg["window"] % 2 == 0:
         raise ValueError(f"matcher config: window must be odd, got {cfg['window']}")
     return cfg

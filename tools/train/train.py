@@ -30,8 +30,8 @@ import torch.distributed as dist
 import torch.nn.functional as F
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from gimm_data import load_pairs, resolve_images  # noqa: E402
-from gimm_model import DEFAULT_CONFIG, GimmMatcher, config_metadata, fold_free_state_dict  # noqa: E402
+from gimm_data import load_pairs, network_image, resolve_images  # noqa: E402
+from gimm_model import DEFAULT_CONFIG, NETWORK_INPUTS, GimmMatcher, config_metadata, fold_free_state_dict  # noqa: E402
 from safetensors_io import save_file  # noqa: E402
 from supervision import PairTruth, fine_losses, fine_targets, focal_loss  # noqa: E402
 
@@ -58,6 +58,9 @@ def parse_args(argv=None):
                    help="train on the renders (<view>.png) or the views as a C-arm forms them "
                         "(<view>.formed.png, gimm-dataset --formation); auto: formed where the "
                         "dataset has them (a clinical-style dataset), else rendered")
+    p.add_argument("--input", default="intensity", choices=NETWORK_INPUTS,
+                   help="what the network sees: the image, or its vesselness (needs the gimm "
+                        "module; recorded in the weights, gimm-match does the same)")
     p.add_argument("--widths", type=int, nargs=3, default=[16, 32, 64])
     p.add_argument("--coarse-layers", nargs="+", default=["self", "cross"])
     p.add_argument("--fine-layers", nargs="+", default=["self", "cross"])
@@ -167,9 +170,11 @@ def pad8(image):
     return F.pad(image, (0, (-w) % 8, 0, (-h) % 8))
 
 
-def make_batch(samples, truths, gen, train=True, device="cpu"):
-    """Augmented on the CPU (the generator's stream does not depend on the device), then moved."""
-    prep = (lambda x: augment(x, gen)) if train else (lambda x: x.float())
+def make_batch(samples, truths, gen, train=True, device="cpu", kind="intensity"):
+    """Augmented on the CPU (the generator's stream does not depend on the device), turned into
+    the network's input kind, then moved."""
+    prep = (lambda x: network_image(augment(x, gen), kind)) if train else \
+        (lambda x: network_image(x.float(), kind))
     a = torch.stack([pad8(prep(s.image_a)) for s in samples])[:, None]
     b = torch.stack([pad8(prep(s.image_b)) for s in samples])[:, None]
     ca = torch.tensor([s.class_a for s in samples])
@@ -267,8 +272,9 @@ def validate(model, pairs, threshold, k=20):
     errors, slots, seconds = [], 0, 0.0
     device = next(model.parameters()).device
     for s in pairs:
-        a = pad8(s.image_a.float())[None, None].to(device)
-        b = pad8(s.image_b.float())[None, None].to(device)
+        kind = model.cfg["input"]
+        a = pad8(network_image(s.image_a.float(), kind))[None, None].to(device)
+        b = pad8(network_image(s.image_b.float(), kind))[None, None].to(device)
         t0 = time.perf_counter()
         out = model(a, b, s.class_a, s.class_b)
         seconds += time.perf_counter() - t0
@@ -384,7 +390,8 @@ def main(argv=None):
         print(f"train: {where} x {world} ranks", flush=True)
     cfg = dict(DEFAULT_CONFIG, widths=args.widths, coarse_layers=args.coarse_layers,
                fine_layers=args.fine_layers, film=not args.no_film, anchor=not args.no_anchor,
-               coarse_heads=4, fine_heads=2 if args.widths[0] % 4 else 4)
+               coarse_heads=4, fine_heads=2 if args.widths[0] % 4 else 4,
+               input=getattr(args, "input", "intensity"))  # runs saved before --input
     torch.manual_seed(args.seed)
     model = GimmMatcher(cfg)
     if model.film is not None and state is None:
@@ -470,7 +477,7 @@ def main(argv=None):
                 order = epoch_order(len(train), args.seed, epoch)
             samples = [train[i] for i in order[pos + rank:pos + per_step:world]]
             pos += per_step
-        batch = make_batch(samples, truths, gen, device=device)
+        batch = make_batch(samples, truths, gen, device=device, kind=cfg["input"])
         for g in opt.param_groups:
             g["lr"] = lr_at(step, args)
         loss, terms = step_module(batch)

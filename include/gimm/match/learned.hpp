@@ -2,14 +2,10 @@
 /// Matching a pair of angiograms: images -> network input -> GIMM matcher -> points back in
 /// image pixels -> epipolar gating -> PairMatches (the gimm-matches/1 predictions format).
 ///
-/// Image sizes. The network needs sides that are multiples of 8, so by default an image runs at
-/// its own size, zero-padded on the right and bottom to the next multiple of 8; matches with a
-/// point outside the image content (in the padding, or refined past an edge) are dropped. The
-/// two images may differ in size (real angiograms of two runs often do): each is resized on its
-/// own, both are padded to the larger rows and columns, and points map back per image.
-/// With `input_size` N > 0 the image is first resized (bilinear, pixel centres aligned, which
-/// is the exact 2x2 box filter at a factor of 2) so that its longer side is N. Points come back
-/// as u = (u_net + 0.5) W / W_net - 0.5 (pixel centres at integers; docs/evaluation.md).
+/// Images become network input as match/network_input.hpp says (resized, vessel-enhanced when
+/// the weights ask for it, padded to multiples of 8); matches with a point outside the image
+/// content (in the padding, or refined past an edge) are dropped. Points come back as
+/// u = (u_net + 0.5) W / W_net - 0.5 (pixel centres at integers; docs/evaluation.md).
 ///
 /// Gating. With both cameras, F is the exact F of the two views (fundamental_from_cameras);
 /// without, it is estimated from the matches as the reference does (gate_reference). Hard
@@ -29,6 +25,7 @@
 #include "gimm/match/field_of_view.hpp"
 #include "gimm/match/learned_options.hpp"
 #include "gimm/match/matches.hpp"
+#include "gimm/match/network_input.hpp"
 #include "gimm/match/pair_matcher.hpp"
 #include "gimm/nn/matcher.hpp"
 
@@ -56,70 +53,6 @@ inline Eigen::Vector2d foot_on_line(const Eigen::Vector3d& l, const Eigen::Vecto
   const double n2 = l.x() * l.x() + l.y() * l.y();
   if (!(n2 > 0)) return p;
   return p - (l.x() * p.x() + l.y() * p.y() + l.z()) / n2 * Eigen::Vector2d(l.x(), l.y());
-}
-
-/// One image as the network sees it.
-struct NetworkInput {
-  nn::Tensor tensor;                       ///< [1, 1, rows, cols], rows and cols multiples of 8
-  int content_rows = 0, content_cols = 0;  ///< the resized image inside the padding
-  double scale_u = 1, scale_v = 1;         ///< image pixels per network pixel
-};
-
-/// Bilinear resampling with pixel centres aligned (PyTorch align_corners=False).
-inline Image<float> resize_bilinear(const Image<float>& image, int rows, int cols) {
-  GIMM_CHECK(rows > 0 && cols > 0, "resize_bilinear: bad size " << cols << "x" << rows);
-  Image<float> out(rows, cols);
-  const double sv = double(image.rows()) / rows, su = double(image.cols()) / cols;
-  for (int r = 0; r < rows; ++r) {
-    const double y = std::clamp((r + 0.5) * sv - 0.5, 0.0, double(image.rows() - 1));
-    const int y0 = int(y), y1 = std::min(y0 + 1, image.rows() - 1);
-    const double wy = y - y0;
-    for (int c = 0; c < cols; ++c) {
-      const double x = std::clamp((c + 0.5) * su - 0.5, 0.0, double(image.cols() - 1));
-      const int x0 = int(x), x1 = std::min(x0 + 1, image.cols() - 1);
-      const double wx = x - x0;
-      const double top = (1 - wx) * image(y0, x0) + wx * image(y0, x1);
-      const double bottom = (1 - wx) * image(y1, x0) + wx * image(y1, x1);
-      out(r, c) = float((1 - wy) * top + wy * bottom);
-    }
-  }
-  return out;
-}
-
-/// `pad_rows` x `pad_cols`: the tensor size to pad to (0: the content's own, rounded up to 8).
-inline NetworkInput to_network_input(const Image<float>& image, int input_size,
-                                     const std::string& name, std::int64_t pad_rows = 0,
-                                     std::int64_t pad_cols = 0) {
-  GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
-  GIMM_CHECK(input_size >= 0, "input_size must be >= 0, got " << input_size);
-  NetworkInput in;
-  Image<float> content = image;
-  if (input_size > 0) {
-    const double scale = double(input_size) / std::max(image.rows(), image.cols());
-    const int rows = std::max(1, int(std::lround(image.rows() * scale)));
-    const int cols = std::max(1, int(std::lround(image.cols() * scale)));
-    if (rows != image.rows() || cols != image.cols()) content = resize_bilinear(image, rows, cols);
-  }
-  in.content_rows = content.rows();
-  in.content_cols = content.cols();
-  GIMM_CHECK(in.content_rows >= 8 && in.content_cols >= 8,
-             name << ": " << image.cols() << "x" << image.rows() << " px resized to "
-                  << in.content_cols << "x" << in.content_rows << " (input size " << input_size
-                  << ") is too small for the matcher (at least 8x8 pixels; a very long, thin "
-                     "image?)");
-  in.scale_u = double(image.cols()) / in.content_cols;
-  in.scale_v = double(image.rows()) / in.content_rows;
-  const std::int64_t rows = std::max<std::int64_t>(pad_rows, (in.content_rows + 7) / 8 * 8);
-  const std::int64_t cols = std::max<std::int64_t>(pad_cols, (in.content_cols + 7) / 8 * 8);
-  GIMM_CHECK(rows % 8 == 0 && cols % 8 == 0, name << ": padded size must be a multiple of 8");
-  in.tensor = nn::Tensor({1, 1, rows, cols});
-  for (int r = 0; r < in.content_rows; ++r)
-    for (int c = 0; c < in.content_cols; ++c) {
-      const float v = content(r, c);
-      GIMM_CHECK(std::isfinite(v), name << ": pixel (" << r << ", " << c << ") is " << v);
-      in.tensor[r * cols + c] = v;
-    }
-  return in;
 }
 
 /// The network's matches gated (options.gate) with the pair's F: the cameras' when the pair
@@ -178,13 +111,14 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const PairInput& p
   pair.validate();
   const Image<float>& image_a = *pair.image_a;
   const Image<float>& image_b = *pair.image_b;
-  NetworkInput a = to_network_input(image_a, options.input_size, "image A");
-  NetworkInput b = to_network_input(image_b, options.input_size, "image B");
+  const NetworkImage kind = network_image_kind(matcher.config().input);
+  NetworkInput a = to_network_input(image_a, options.input_size, kind, "image A");
+  NetworkInput b = to_network_input(image_b, options.input_size, kind, "image B");
   if (a.tensor.shape() != b.tensor.shape()) {  // images of different sizes: one tensor size
     const std::int64_t rows = std::max(a.tensor.dim(2), b.tensor.dim(2));
     const std::int64_t cols = std::max(a.tensor.dim(3), b.tensor.dim(3));
-    a = to_network_input(image_a, options.input_size, "image A", rows, cols);
-    b = to_network_input(image_b, options.input_size, "image B", rows, cols);
+    a = to_network_input(image_a, options.input_size, kind, "image A", rows, cols);
+    b = to_network_input(image_b, options.input_size, kind, "image B", rows, cols);
   }
   const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, pair.class_a, pair.class_b);
 

@@ -55,6 +55,10 @@ struct MatcherConfig {
   std::string gate_mode;
   double gate_delta_px = 0;  ///< hard gate threshold, px
   bool gate_snap = false;    ///< B points moved onto their epipolar lines
+  /// What the network sees of an image (match/network_input.hpp): "intensity", the image as it
+  /// is, or "vesselness", its vessels enhanced. Absent in files written before it existed:
+  /// intensity.
+  std::string input = "intensity";
 
   std::int64_t coarse_dim() const { return widths[2]; }
   std::int64_t fine_dim() const { return widths[0]; }
@@ -86,6 +90,8 @@ struct MatcherConfig {
                "matcher config: gate mode must be hard|soft|logit|none, got '" << gate_mode << "'");
     GIMM_CHECK(gate_mode != "hard" || (std::isfinite(gate_delta_px) && gate_delta_px > 0),
                "matcher config: gate delta_px must be > 0, got " << gate_delta_px);
+    GIMM_CHECK(input == "intensity" || input == "vesselness",
+               "matcher config: input must be intensity|vesselness, got '" << input << "'");
   }
 };
 

@@ -53,7 +53,7 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   static const std::set<std::string> known = {
       "format", "widths",       "coarse_heads", "fine_heads",  "coarse_layers", "fine_layers",
       "film",   "film_classes", "film_dim",     "temperature", "threshold",     "border",
-      "window", "anchor",       "input_size",   "gate"};
+      "window", "anchor",       "input_size",   "gate",        "input"};
   for (const auto& [key, value] : j.items())
     GIMM_CHECK_AS(FormatError, known.count(key),
                   where << ": unknown key '" << key << "' (this reader knows " << kMatcherFormat
@@ -81,6 +81,7 @@ inline nn::MatcherConfig matcher_config_from_json(const nlohmann::json& j,
   c.window = config_value<int>(j, "window", where);
   if (j.contains("anchor")) c.anchor = config_value<bool>(j, "anchor", where);
   if (j.contains("input_size")) c.input_size = config_value<int>(j, "input_size", where);
+  if (j.contains("input")) c.input = config_value<std::string>(j, "input", where);
   if (j.contains("gate")) {  // {"mode": "hard", "delta_px": 4, "snap": true}; absent in older files
     const auto gate = config_value<nlohmann::json>(j, "gate", where);
     GIMM_CHECK_AS(FormatError, gate.is_object(),
