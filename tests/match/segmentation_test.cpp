@@ -94,3 +94,95 @@ TEST_CASE("Segmentation recovers a rendered phantom's vessel mask", "[match][seg
   CHECK(recall >= 0.90);
   CHECK(precision >= 0.40);
 }
+
+namespace {
+/// A 128 x 128 frame: bright field, a faint vessel (a dark 5 px vertical bar at column 64) and a
+/// collimator along the top: the shutter's frame (rows 0-2, grey) and its dark edge (rows 3-6,
+/// almost black), a thin dark line along the image's edge.
+gimm::Image<float> collimated_frame() {
+  gimm::Image<float> image(128, 128, 0.8f);
+  for (int r = 0; r < 128; ++r)
+    for (int c = 62; c <= 66; ++c) image(r, c) = 0.65f;
+  for (int r = 0; r < 7; ++r)
+    for (int c = 0; c < 128; ++c) image(r, c) = r < 3 ? 0.3f : 0.02f;
+  return image;
+}
+
+gimm::Image<std::uint8_t> field_below(int first_row) {
+  gimm::Image<std::uint8_t> field(128, 128, 0);
+  for (int r = first_row; r < 128; ++r)
+    for (int c = 0; c < 128; ++c) field(r, c) = 1;
+  return field;
+}
+
+int count_in_rows(const gimm::Image<std::uint8_t>& mask, int r0, int r1, int c0, int c1) {
+  int n = 0;
+  for (int r = r0; r < r1; ++r)
+    for (int c = c0; c < c1; ++c) n += mask(r, c) != 0;
+  return n;
+}
+}  // namespace
+
+TEST_CASE("Segmentation inside the exposed field: a collimator strip does not hide the vessels",
+          "[match][segmentation]") {
+  const gimm::Image<float> image = collimated_frame();
+  gimm::SegmentationOptions o;
+  o.vesselness.scales_px = {1.5, 2.5, 3.5};
+  // Without the field the strip is the strongest "vessel" and the faint one falls below the
+  // thresholds (what happened to a clinical-style view: 31 vessel pixels were left).
+  const auto blind = gimm::segment_vessels(image, o);
+  CHECK(count_in_rows(blind, 20, 128, 60, 69) < 50);
+  // With it, the frame is filled from the field and the vessel is found along its length; the
+  // mask is empty outside the field and within field_edge_px of it.
+  const auto field = field_below(7);
+  const auto mask = gimm::segment_vessels(image, o, &field);
+  CHECK(count_in_rows(mask, 20, 128, 60, 69) > 108 * 3);
+  CHECK(count_in_rows(mask, 0, 7 + o.field_edge_px, 0, 128) == 0);
+  CHECK(count_in_rows(mask, 0, 128, 0, 55) + count_in_rows(mask, 0, 128, 72, 128) == 0);
+}
+
+TEST_CASE("Segmentation inside the exposed field: a vignette at its edge is no line",
+          "[match][segmentation]") {
+  // A field darker towards its lower edge (a vignette, as inside a detected field's margin):
+  // filled with a constant, its last rows would be a dark line along the edge.
+  gimm::Image<float> image(128, 128, 0.8f);
+  for (int r = 90; r < 128; ++r)
+    for (int c = 0; c < 128; ++c) image(r, c) = 0.8f - 0.01f * float(r - 90);
+  for (int r = 0; r < 128; ++r)
+    for (int c = 62; c <= 66; ++c) image(r, c) -= 0.15f;
+  gimm::Image<std::uint8_t> field(128, 128, 0);
+  for (int r = 0; r < 110; ++r)
+    for (int c = 0; c < 128; ++c) field(r, c) = 1;
+  gimm::SegmentationOptions o;
+  o.vesselness.scales_px = {1.5, 2.5, 3.5};
+  const auto mask = gimm::segment_vessels(image, o, &field);
+  CHECK(count_in_rows(mask, 0, 128, 0, 55) + count_in_rows(mask, 0, 128, 72, 128) == 0);
+  CHECK(count_in_rows(mask, 10, 100, 60, 69) > 90 * 3);
+}
+
+TEST_CASE("Segmentation inside the exposed field: outside pixels take the nearest kept value",
+          "[match][segmentation]") {
+  gimm::Image<float> image(6, 8), filled;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 8; ++c) image(r, c) = float(10 * r + c);
+  gimm::Image<std::uint8_t> field(6, 8, 0), inside;
+  for (int r = 2; r < 4; ++r)
+    for (int c = 3; c < 6; ++c) field(r, c) = 1;  // rows 2-3, columns 3-5
+  gimm::Image<int> counts;
+  gimm::detail::fill_outside_field(image, field, 0, filled, inside, counts);
+  CHECK(filled(2, 0) == image(2, 3));  // left of the field: its row's first kept pixel
+  CHECK(filled(3, 7) == image(3, 5));  // right: the row's last
+  CHECK(filled(2, 4) == image(2, 4));  // kept
+  CHECK(filled(0, 4) == image(2, 4));  // rows above: the nearest kept row's filled values
+  CHECK(filled(5, 0) == image(3, 3));
+  CHECK(inside(2, 3) == 1);
+  CHECK(inside(1, 3) == 0);
+  // With an edge band of 1 px only the field's middle column, away from its edge, is kept:
+  // a 2-row field has no pixel 1 px from its edge, so nothing is; the image becomes flat.
+  gimm::detail::fill_outside_field(image, field, 1, filled, inside, counts);
+  for (std::uint8_t v : inside.storage()) CHECK(v == 0);
+  for (float v : filled.storage()) CHECK(v == 0.0f);
+  gimm::Image<std::uint8_t> small(5, 8, 1);
+  CHECK_THROWS_WITH(gimm::detail::fill_outside_field(image, small, 0, filled, inside, counts),
+                    Catch::Contains("the field is 8 x 5, the image 8 x 6"));
+}

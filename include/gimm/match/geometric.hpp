@@ -528,7 +528,7 @@ inline VesselView vessel_view(const Image<float>* image, const Image<std::uint8_
     SegmentationOptions seg = o.segmentation;
     if (o.scales_from_cameras)
       seg.vesselness.scales_px = vessel_scales(detail::pixels_per_mm(camera, isocenter));
-    segment_vessels(*image, seg, v.mask, buffers.segmentation);
+    segment_vessels(*image, seg, v.mask, buffers.segmentation, field);
     v.segmented = true;
   }
   if (field) clear_outside(v.mask, *field);
