@@ -79,13 +79,10 @@ gimm::Image<float> read_view_png(const char* flag, const std::string& path) {
   return image;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)",
-               "gimm-match"};
+/// Every flag's value; what no flag sets keeps the library's default.
+struct Flags {
   std::string image_a, image_b, weights, camera_a, camera_b, gate = "hard", out, picture, pair;
-  std::string dataset, split = "all", geometry = "cameras", method = "learned";
+  std::string dataset, split = "all", geometry = "cameras", method = "learned", images = "auto";
   double sigma = 1.0;
   std::uint64_t seed = 0;
   gimm::EpipolarBaselineOptions epi;
@@ -94,181 +91,436 @@ int main(int argc, char** argv) {
   gimm::GeometricOptions geometric;
   gimm::CameraError camera_error;
   gimm::ImageDegradation degradation;
-  bool segment = false, exact_vesselness = false;
+  bool segment = false, exact_vesselness = false, keep_catheter = false;
+  double min_confidence = 0;
   std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
   int frame_a = -1, frame_b = -1;
-  std::vector<double> isocenter;
+  std::vector<double> isocenter, isocenter_a, isocenter_b, table_a, table_b;
+  double pixel_a = 0, pixel_b = 0;
   double max_reprojection = 0;
   float threshold = 0;
-  app.add_option("--image-a", image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
-  app.add_option("--image-b", image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
-  app.add_option("--dataset", dataset, "match every pair of this gimm-dataset (--out: a folder)")
+  CLI::Option* threshold_flag = nullptr;
+  CLI::Option* input_size_flag = nullptr;
+};
+
+/// What to match and how: the inputs, the dataset mode, the method.
+void add_input_flags(CLI::App& app, Flags& f) {
+  app.add_option("--image-a", f.image_a, "view A, PNG (8 or 16 bit)")->check(CLI::ExistingFile);
+  app.add_option("--image-b", f.image_b, "view B, PNG, same size as A")->check(CLI::ExistingFile);
+  app.add_option("--dataset", f.dataset, "match every pair of this gimm-dataset (--out: a folder)")
       ->check(CLI::ExistingDirectory);
-  app.add_option("--split", split, "dataset mode: all|train|val|test")
+  app.add_option("--split", f.split, "dataset mode: all|train|val|test")
       ->check(CLI::IsMember({"all", "train", "val", "test"}))
       ->capture_default_str();
-  std::string images = "auto";
-  app.add_option("--images", images,
+  app.add_option("--images", f.images,
                  "dataset mode: rendered (<view>.png) | formed (<view>.formed.png as a C-arm "
                  "forms it, matched inside <view>.field.png; gimm-dataset --formation) | auto "
                  "(formed where the dataset has them, as a clinical-style dataset does)")
       ->check(CLI::IsMember({"auto", "rendered", "formed"}))
       ->capture_default_str();
-  app.add_option("--geometry", geometry, "dataset mode: F from the view cameras or the matches")
+  app.add_option("--geometry", f.geometry, "dataset mode: F from the view cameras or the matches")
       ->check(CLI::IsMember({"cameras", "matches"}))
       ->capture_default_str();
-  app.add_option("--method", method,
+  app.add_option("--method", f.method,
                  "learned (the GIMM network) | geometric (epipolar DP, needs cameras) | epipolar "
                  "| oracle (training-free, dataset mode; match/pair_matcher.hpp)")
       ->check(CLI::IsMember({"learned", "epipolar", "oracle", "geometric"}))
       ->capture_default_str();
-  app.add_option("--weights", weights,
+  app.add_option("--weights", f.weights,
                  "learned: matcher weights, safetensors (default: the shipped weights, " +
                      gimm::cli::default_weights_hint() + ")")
       ->check(CLI::ExistingFile);
-  app.add_option("--sigma", sigma, "oracle: Gaussian noise on the B side, px per axis")
+}
+
+/// The baselines', the geometric matcher's and the dataset mode's stability-sweep flags.
+void add_method_flags(CLI::App& app, Flags& f) {
+  app.add_option("--sigma", f.sigma, "oracle: Gaussian noise on the B side, px per axis")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
-  app.add_option("--seed", seed, "oracle/epipolar/camera errors: random seed")
+  app.add_option("--seed", f.seed, "oracle/epipolar/camera errors: random seed")
       ->capture_default_str();
-  app.add_option("--max-points", epi.max_points, "epipolar: A vessel pixels sampled per pair")
+  app.add_option("--max-points", f.epi.max_points, "epipolar: A vessel pixels sampled per pair")
       ->capture_default_str();
-  app.add_option("--tolerance", geometric.epipolar_tolerance_px,
+  app.add_option("--tolerance", f.geometric.epipolar_tolerance_px,
                  "geometric: epipolar tolerance, px (calibration error of real C-arms)")
       ->capture_default_str()
       ->check(gimm::cli::Positive);
-  app.add_option("--junction-mm", geometric.junction_mm,
+  app.add_option("--junction-mm", f.geometric.junction_mm,
                  "geometric, segmenting: tree prior, how far in 3D the matches of two chains "
                  "meeting in A may be, mm (0 = off)")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
-  double min_confidence = 0;
-  app.add_option("--min-confidence", min_confidence,
+  app.add_option("--min-confidence", f.min_confidence,
                  "geometric: the DP margin a match needs at 4/3 px per mm at the isocentre (the "
                  "256 px phantoms), scaled with the images' pixels per mm (default 0.5 with "
                  "masks, 1 segmenting; docs/geometric-matcher.md)")
       ->check(gimm::cli::at_least(0));
-  app.add_option("--order-cost", geometric.w_order,
+  app.add_option("--order-cost", f.geometric.w_order,
                  "geometric: cost of going back along a chain of B (ordering), 0 = no term")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
-  bool keep_catheter = false;
-  app.add_flag("--keep-catheter", keep_catheter,
+  app.add_flag("--keep-catheter", f.keep_catheter,
                "geometric, segmenting: keep the chains that look like the catheter or a field "
                "edge (long and straight, or leaving the field at an even calibre); by default "
                "they are dropped before matching (docs/geometric-matcher.md)");
-  app.add_option("--camera-error-deg", camera_error.deg,
+  app.add_option("--camera-error-deg", f.camera_error.deg,
                  "dataset mode: rotate each view's camera given to the matcher by this many "
                  "degrees about both axes across the view (random signs, --seed), images exact")
       ->capture_default_str()
       ->check(gimm::cli::in_range(0, 45, true));
-  app.add_option("--camera-error-mm", camera_error.mm,
+  app.add_option("--camera-error-mm", f.camera_error.mm,
                  "dataset mode: shift each view's camera by this many mm (random direction)")
       ->capture_default_str()
       ->check(gimm::cli::in_range(0, 1000, true));
-  app.add_option("--noise-photons", degradation.photons,
+  app.add_option("--noise-photons", f.degradation.photons,
                  "dataset mode: Poisson noise on the images the matcher sees, photons per "
                  "unattenuated pixel (render/image_degradation.hpp; 0 = none)")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
-  app.add_option("--blur-px", degradation.blur_px,
+  app.add_option("--blur-px", f.degradation.blur_px,
                  "dataset mode: Gaussian blur of the images the matcher sees, sigma px (0 = none)")
       ->capture_default_str()
       ->check(gimm::cli::at_least(0));
-  app.add_flag("--segment", segment,
+  app.add_flag("--segment", f.segment,
                "geometric, dataset mode: segment the images instead of using the vessel masks");
-  app.add_flag("--exact-vesselness", exact_vesselness,
+  app.add_flag("--exact-vesselness", f.exact_vesselness,
                "geometric, segmenting: exact Gaussian-derivative kernels (the slow reference path; "
                "docs/geometric-matcher.md gives both paths' figures)");
-  app.add_option("--tree", tree,
+}
+
+/// The triangulated tree, and the DICOM views with their per-view corrections.
+void add_tree_and_dicom_flags(CLI::App& app, Flags& f) {
+  app.add_option("--tree", f.tree,
                  "single pair with cameras: the matches with their triangulated points (JSON)");
-  app.add_option("--tree-vtk", tree_vtk,
+  app.add_option("--tree-vtk", f.tree_vtk,
                  "single pair with cameras: the triangulated points as VTK polydata");
-  app.add_option("--max-reprojection", max_reprojection,
+  app.add_option("--max-reprojection", f.max_reprojection,
                  "learned, --tree: drop points reprojecting further than this, px (default: the "
                  "hard gate's --delta)")
       ->check(gimm::cli::Positive);
-  app.add_option("--dicom-a", dicom_a, "view A: XA/XRF DICOM file (image and C-arm geometry)")
+  app.add_option("--dicom-a", f.dicom_a, "view A: XA/XRF DICOM file (image and C-arm geometry)")
       ->check(CLI::ExistingFile);
-  app.add_option("--dicom-b", dicom_b,
+  app.add_option("--dicom-b", f.dicom_b,
                  "view B: XA/XRF DICOM file; its table is taken relative "
                  "to A's")
       ->check(CLI::ExistingFile);
-  app.add_option("--isocenter", isocenter,
+  app.add_option("--isocenter", f.isocenter,
                  "with --dicom-a/b: A's isocentre X Y Z, patient mm, B's at A's table (default "
                  "0: --tree points relative to it)")
       ->expected(3)
       ->check(gimm::cli::position_mm);
-  std::vector<double> isocenter_a, isocenter_b, table_a, table_b;
-  double pixel_a = 0, pixel_b = 0;
-  app.add_option("--isocenter-a", isocenter_a, "with --dicom-a/b: A's isocentre X Y Z only")
+  app.add_option("--isocenter-a", f.isocenter_a, "with --dicom-a/b: A's isocentre X Y Z only")
       ->expected(3)
       ->check(gimm::cli::position_mm);
-  app.add_option("--isocenter-b", isocenter_b,
+  app.add_option("--isocenter-b", f.isocenter_b,
                  "with --dicom-a/b: B's isocentre X Y Z at its own table (default: A's)")
       ->expected(3)
       ->check(gimm::cli::position_mm);
-  app.add_option("--table-a", table_a,
+  app.add_option("--table-a", f.table_a,
                  "with --dicom-a/b: A's table LATERAL VERTICAL LONGITUDINAL, mm, replacing the "
                  "file's")
       ->expected(3)
       ->check(gimm::cli::position_mm);
-  app.add_option("--table-b", table_b, "with --dicom-a/b: B's table, as --table-a")
+  app.add_option("--table-b", f.table_b, "with --dicom-a/b: B's table, as --table-a")
       ->expected(3)
       ->check(gimm::cli::position_mm);
-  app.add_option("--pixel-a", pixel_a,
+  app.add_option("--pixel-a", f.pixel_a,
                  "with --dicom-a/b: A's detector pixel pitch, mm, replacing the file's")
       ->check(gimm::cli::pitch_mm);
-  app.add_option("--pixel-b", pixel_b, "with --dicom-a/b: B's pitch, as --pixel-a")
+  app.add_option("--pixel-b", f.pixel_b, "with --dicom-a/b: B's pitch, as --pixel-a")
       ->check(gimm::cli::pitch_mm);
-  app.add_option("--frame-a", frame_a, "frame of --dicom-a, 0-based (default: the middle one)")
+  app.add_option("--frame-a", f.frame_a, "frame of --dicom-a, 0-based (default: the middle one)")
       ->check(gimm::cli::at_least(0));
-  app.add_option("--frame-b", frame_b, "frame of --dicom-b, 0-based (default: the middle one)")
+  app.add_option("--frame-b", f.frame_b, "frame of --dicom-b, 0-based (default: the middle one)")
       ->check(gimm::cli::at_least(0));
-  app.add_option("--system", system_name,
+  app.add_option("--system", f.system_name,
                  "LCA|RCA: the injected system, for view classes from DICOM angles (default: the "
                  "nearest of all 11 classes)")
       ->check(CLI::IsMember({"LCA", "RCA"}));
-  app.add_option("--class-a", class_a, "view class of A: 1..11, 0 = unknown")
+}
+
+/// The learned matcher: view classes, cameras, the gate, threshold and size; the outputs.
+void add_learned_and_output_flags(CLI::App& app, Flags& f) {
+  app.add_option("--class-a", f.class_a, "view class of A: 1..11, 0 = unknown")
       ->capture_default_str()
       ->check(CLI::Range(0, 11));
-  app.add_option("--class-b", class_b, "view class of B: 1..11, 0 = unknown")
+  app.add_option("--class-b", f.class_b, "view class of B: 1..11, 0 = unknown")
       ->capture_default_str()
       ->check(CLI::Range(0, 11));
-  app.add_option("--camera-a", camera_a,
+  app.add_option("--camera-a", f.camera_a,
                  "camera of A (JSON): gate with the exact F; with --dicom-a/b it replaces the "
                  "geometry read from A's file")
       ->check(CLI::ExistingFile);
-  app.add_option("--camera-b", camera_b, "camera of B (JSON)")->check(CLI::ExistingFile);
-  app.add_option("--gate", gate,
+  app.add_option("--camera-b", f.camera_b, "camera of B (JSON)")->check(CLI::ExistingFile);
+  app.add_option("--gate", f.gate,
                  "epipolar gate: hard|soft|logit|none (default: the gate the weights record - "
                  "the shipped ones: hard, 4 px, --snap - else hard)")
       ->check(CLI::IsMember({"hard", "soft", "logit", "none"}));
-  app.add_option("--tau", options.gate.tau, "soft/logit gate temperature, px")
+  app.add_option("--tau", f.options.gate.tau, "soft/logit gate temperature, px")
       ->capture_default_str()
       ->check(gimm::cli::Positive);
-  app.add_option("--delta", options.gate.delta_px,
+  app.add_option("--delta", f.options.gate.delta_px,
                  "hard gate threshold, px (default: the weights' record, else 2; 5 with DICOM)")
       ->check(gimm::cli::Positive);
-  auto* threshold_flag =
-      app.add_option("--threshold", threshold,
+  f.threshold_flag =
+      app.add_option("--threshold", f.threshold,
                      "learned: coarse confidence a match needs, in [0, 1) (default: the value "
                      "the weights record)")
           ->check(gimm::cli::in_range(0.0, 1.0, false));
-  app.add_flag("--snap", options.snap_to_epipolar,
+  app.add_flag("--snap", f.options.snap_to_epipolar,
                "move each B point onto its epipolar line after gating (needs a gate; default: "
                "as the weights record)");
-  auto* input_size_flag =
+  f.input_size_flag =
       app.add_option(
-             "--input-size", input_size,
+             "--input-size", f.input_size,
              "resize the longer side to N before matching (0: as is; default: the size the weights "
              "were trained at, as they record it)")
           ->check(gimm::cli::zero_or_in(16, 4096));
-  app.add_option("--pair", pair,
+  app.add_option("--pair", f.pair,
                  "pair id written into the matches file, e.g. phantom-0000/LCA_00-01");
-  app.add_option("--out", out, "matches file (gimm-matches/1 JSON); default: print a summary only");
-  app.add_option("--picture", picture, "PNG of the two views with the matches drawn");
+  app.add_option("--out", f.out,
+                 "matches file (gimm-matches/1 JSON); default: print a summary only");
+  app.add_option("--picture", f.picture, "PNG of the two views with the matches drawn");
+}
 
+/// The learned matcher's weights (given or shipped) and the flags given for it; what no flag
+/// sets comes from the weights' record (examples/match/match_learned.cpp).
+gimm_match::LearnedChoice learned_choice(const CLI::App& app, const Flags& f) {
+  gimm_match::LearnedChoice choice;
+  choice.weights = f.weights.empty() ? gimm::cli::default_weights() : f.weights;
+  if (f.threshold_flag->count()) choice.threshold = f.threshold;
+  if (f.input_size_flag->count()) choice.input_size = f.input_size;
+  // Real DICOM geometry keeps its own wider --delta default, set in load_dicom_views.
+  if (app.count("--gate")) choice.gate.mode = f.options.gate.mode;
+  if (app.count("--delta") || !f.dicom_a.empty()) choice.gate.delta_px = f.options.gate.delta_px;
+  if (app.count("--snap")) choice.gate.snap = f.options.snap_to_epipolar;
+  choice.gate_name = f.gate;
+  choice.max_reprojection = f.max_reprojection;
+  return choice;
+}
+
+/// A flag of one method given to another, or of a gate to another gate, would be silently
+/// ignored: refused. The geometric flags that every mode shares are applied here.
+void check_method_flags(const CLI::App& app, Flags& f) {
+  const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
+                                                              {"--order-cost", "geometric"},
+                                                              {"--junction-mm", "geometric"},
+                                                              {"--min-confidence", "geometric"},
+                                                              {"--segment", "geometric"},
+                                                              {"--exact-vesselness", "geometric"},
+                                                              {"--keep-catheter", "geometric"},
+                                                              {"--sigma", "oracle"},
+                                                              {"--max-points", "epipolar"},
+                                                              {"--gate", "learned"},
+                                                              {"--tau", "learned"},
+                                                              {"--delta", "learned"},
+                                                              {"--snap", "learned"},
+                                                              {"--threshold", "learned"},
+                                                              {"--input-size", "learned"},
+                                                              {"--max-reprojection", "learned"},
+                                                              {"--class-a", "learned"},
+                                                              {"--class-b", "learned"},
+                                                              {"--system", "learned"}};
+  for (const auto& [flag, owner] : method_flags)
+    GIMM_USAGE_CHECK(app.count(flag) == 0 || f.method == owner,
+                     flag << " is for --method " << owner << ", not " << f.method);
+  GIMM_USAGE_CHECK(f.weights.empty() || f.method == "learned",
+                   "--weights is for --method learned, not " << f.method);
+  if (app.count("--gate")) {
+    GIMM_USAGE_CHECK(
+        f.gate != "none" || ((app.count("--snap") == 0 || !f.options.snap_to_epipolar) &&
+                             app.count("--delta") == 0 && app.count("--tau") == 0),
+        "--gate none: --snap, --delta and --tau need a gate");
+    GIMM_USAGE_CHECK(f.gate != "hard" || app.count("--tau") == 0,
+                     "--tau is the soft/logit gates' temperature, not --gate hard's");
+    GIMM_USAGE_CHECK((f.gate != "soft" && f.gate != "logit") || app.count("--delta") == 0,
+                     "--delta is --gate hard's threshold, not --gate " << f.gate << "'s");
+  }
+  GIMM_USAGE_CHECK(!f.keep_catheter || f.segment || f.dataset.empty(),
+                   "--keep-catheter is about segmented chains: with --dataset it needs "
+                   "--segment (without it the matcher uses the vessel masks)");
+  if (f.keep_catheter)
+    f.geometric.catheter.min_length_mm = 0, f.geometric.catheter.field_edge_px = 0;
+  GIMM_USAGE_CHECK(app.count("--exact-vesselness") == 0 || f.segment || f.dataset.empty(),
+                   "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
+                   "(without it the matcher uses the vessel masks)");
+  // Every mode segments with it: a dataset (--segment), a pair of images, a pair of DICOMs.
+  f.geometric.segmentation.vesselness.exact_derivatives = f.exact_vesselness;
+  if (app.count("--min-confidence"))  // whichever of the two thresholds the mode uses
+    f.geometric.min_confidence = f.geometric.min_confidence_segmented = f.min_confidence;
+}
+
+/// --dataset: every pair of the dataset, through gimm::match_dataset.
+int match_dataset_mode(const CLI::App& app, Flags& f) {
+  GIMM_USAGE_CHECK(f.image_a.empty() && f.image_b.empty() && f.camera_a.empty() &&
+                       f.camera_b.empty() && f.dicom_a.empty() && f.dicom_b.empty() &&
+                       f.picture.empty() && f.pair.empty() && f.tree.empty() &&
+                       f.tree_vtk.empty() && f.class_a == 0 && f.class_b == 0,
+                   "--dataset matches a whole dataset (classes and cameras from its files); it "
+                   "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
+                   "--picture or --tree/--tree-vtk");
+  GIMM_USAGE_CHECK(!f.out.empty(), "--dataset needs --out PRED_DIR");
+  std::unique_ptr<gimm::PairMatcher> matcher;
+  if (f.method == "learned") {
+    matcher = gimm_match::learned_matcher(learned_choice(app, f), f.options);
+  } else if (f.method == "geometric") {
+    GIMM_USAGE_CHECK(
+        f.geometry == "cameras",
+        "--method geometric needs the cameras (--geometry cameras), got --geometry " << f.geometry);
+    f.geometric.use_masks = !f.segment;
+    matcher = gimm_match::geometric_matcher(f.geometric);
+  } else {
+    GIMM_USAGE_CHECK(std::isfinite(f.sigma) && f.sigma >= 0,
+                     "--sigma must be >= 0, got " << f.sigma);
+    matcher = gimm::baseline_matcher(f.method, f.sigma, f.epi, f.seed);
+  }
+  gimm::MatchRunOptions run;
+  run.split = f.split;
+  run.use_cameras = f.geometry == "cameras";
+  run.images = f.images == "formed"     ? gimm::DatasetImages::formed
+               : f.images == "rendered" ? gimm::DatasetImages::rendered
+                                        : gimm::DatasetImages::automatic;
+  run.camera_error = f.camera_error;
+  run.degradation = f.degradation;
+  run.seed = f.seed;
+  run.report = gimm::stderr_reporter(false, "gimm-match: ");
+  const gimm::DatasetReader reader(f.dataset);
+  gimm::cli::flag_value("", [&] { run.validate(*matcher, reader); });
+  const gimm::MatchRunSummary done = gimm::match_dataset(*matcher, f.dataset, f.out, run);
+  std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", done.pairs, done.matches,
+              f.out.c_str());
+  // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
+  // without F is written ungated.
+  const bool estimates_F = f.method == "learned" && f.geometry == "matches" &&
+                           f.options.gate.mode != gimm::GateMode::none;
+  if (estimates_F && done.without_F > 0)
+    std::printf(
+        "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
+        "matches, or a degenerate fit); those pairs are not gated\n",
+        done.without_F, done.pairs, f.options.gate.min_matches);
+  return 0;
+}
+
+/// --dicom-a/b: images, cameras and fields from the files, each view's corrections applied;
+/// the learned matcher's classes from the angles unless given. Real geometry widens the gate.
+gimm_match::LoadedPair load_dicom_views(const CLI::App& app, Flags& f) {
+  GIMM_USAGE_CHECK(!f.dicom_a.empty() && !f.dicom_b.empty(), "give both --dicom-a and --dicom-b");
+  GIMM_USAGE_CHECK(f.image_a.empty() && f.image_b.empty(),
+                   "--dicom-a/b carry the images: no --image-a/b");
+  GIMM_USAGE_CHECK(f.isocenter.empty() || (f.isocenter_a.empty() && f.isocenter_b.empty()),
+                   "--isocenter sets both views' isocentre: give it or --isocenter-a/-b, not both");
+  gimm::DicomPairOptions o;
+  const auto vec3 = [](const std::vector<double>& v) -> std::optional<Eigen::Vector3d> {
+    if (v.empty()) return std::nullopt;
+    return Eigen::Vector3d(v[0], v[1], v[2]);
+  };
+  for (auto [s, frame, pixel, table, iso, camera, flag_pixel] :
+       {std::tuple{&o.a, f.frame_a, f.pixel_a, &f.table_a, &f.isocenter_a, &f.camera_a,
+                   "--pixel-a"},
+        {&o.b, f.frame_b, f.pixel_b, &f.table_b, &f.isocenter_b, &f.camera_b, "--pixel-b"}}) {
+    if (frame >= 0) s->frame = frame;
+    if (app.count(flag_pixel)) s->pitch_mm = pixel;
+    s->table_mm = vec3(*table);
+    s->isocenter = vec3(f.isocenter.empty() ? *iso : f.isocenter);
+    s->camera = read_camera(*camera);
+  }
+  if (!f.system_name.empty()) o.system = gimm::parse_coronary_system(f.system_name);
+  const bool classes_given = app.count("--class-a") && app.count("--class-b");
+  o.need_classes = f.method == "learned" && !classes_given;
+  o.need_system = o.need_classes;
+  const gimm::DicomPair dp = gimm::load_dicom_pair(f.dicom_a, f.dicom_b, o);
+  for (const auto& w : dp.warnings) std::cerr << "gimm-match: warning: " << w << "\n";
+  for (const auto* v : {&dp.a, &dp.b}) {
+    const bool is_a = v == &dp.a;
+    const gimm::XaFrame& x = v->frame;
+    std::cout << "gimm-match: view " << (is_a ? "A" : "B") << ": " << x.path << " frame " << x.frame
+              << "/" << x.frames << ", " << x.carm.cols << "x" << x.carm.rows << ", primary "
+              << x.carm.primary_deg << ", secondary " << x.carm.secondary_deg << " deg, table "
+              << x.table_source << "; field " << v->field_source;
+    if (o.need_classes) {
+      (is_a ? f.class_a : f.class_b) = v->view_class;
+      std::cout << "; " << v->class_note;
+    }
+    for (const auto& c : v->corrections) std::cout << "; " << c;
+    std::cout << "\n";
+  }
+  // Real C-arm geometry: true correspondences lie ~2 px (median) and ~4.5 px (90th
+  // percentile) off their epipolar lines; 5 px keeps ~93% of them (docs/dicom.md).
+  if (app.count("--delta") == 0) f.options.gate.delta_px = 5.0;
+  if (app.count("--tolerance") == 0) f.geometric.epipolar_tolerance_px = 5.0;
+  std::cout << "gimm-match: real geometry: gate " << f.options.gate.delta_px
+            << " px, geometric tolerance " << f.geometric.epipolar_tolerance_px << " px\n";
+  return {dp.a.frame.image, dp.b.frame.image, dp.a.camera, dp.b.camera, dp.a.field, dp.b.field};
+}
+
+/// --image-a/b (and --camera-a/b): PNG views; a PNG carries no shutter, so the exposed fields
+/// are found in the images.
+gimm_match::LoadedPair load_png_views(const CLI::App& app, const Flags& f) {
+  GIMM_USAGE_CHECK(!f.image_a.empty() && !f.image_b.empty(),
+                   "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
+  for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
+                           "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
+    GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
+  GIMM_USAGE_CHECK(f.camera_a.empty() == f.camera_b.empty(),
+                   "give both --camera-a and --camera-b (the pair's geometry), or neither");
+  gimm_match::LoadedPair pair;
+  pair.a = read_view_png("--image-a", f.image_a);
+  pair.b = read_view_png("--image-b", f.image_b);
+  pair.camera_a = read_camera(f.camera_a);
+  pair.camera_b = read_camera(f.camera_b);
+  pair.field_a = gimm::exposed_field(pair.a);
+  pair.field_b = gimm::exposed_field(pair.b);
+  return pair;
+}
+
+/// One pair, from DICOM files or from PNG images and camera JSON files.
+int match_one_pair(const CLI::App& app, Flags& f, std::chrono::steady_clock::time_point start) {
+  for (const char* flag :
+       {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px", "--images"})
+    GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
+  for (const auto& [flag, frame] : {std::pair{"--frame-a", f.frame_a}, {"--frame-b", f.frame_b}})
+    GIMM_USAGE_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
+  GIMM_USAGE_CHECK(app.count("--max-reprojection") == 0 || f.max_reprojection > 0,
+                   "--max-reprojection must be > 0 px, got " << f.max_reprojection);
+  const gimm_match::LoadedPair loaded =
+      !f.dicom_a.empty() || !f.dicom_b.empty() ? load_dicom_views(app, f) : load_png_views(app, f);
+  if (loaded.camera_a && loaded.camera_b) {
+    try {  // two views from one place (a file given twice) have no epipolar geometry
+      static_cast<void>(gimm::fundamental_from_cameras(*loaded.camera_a, *loaded.camera_b));
+    } catch (const gimm::Error& e) {
+      const std::string a =
+          f.camera_a.empty() ? "--dicom-a " + f.dicom_a : "--camera-a " + f.camera_a;
+      const std::string b =
+          f.camera_b.empty() ? "--dicom-b " + f.dicom_b : "--camera-b " + f.camera_b;
+      throw gimm::Error(std::string(e.what()) + " (" + a + ", " + b + ")");
+    }
+  }
+  GIMM_USAGE_CHECK(f.method != "geometric" || (loaded.camera_a && loaded.camera_b),
+                   "--method geometric on one pair needs the cameras: --camera-a and "
+                   "--camera-b (or --dicom-a and --dicom-b)");
+  GIMM_USAGE_CHECK((f.tree.empty() && f.tree_vtk.empty()) || loaded.camera_a,
+                   "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
+  const gimm_match::PairOutputs outputs{f.pair, f.out, f.picture, f.tree, f.tree_vtk, start};
+  if (f.method == "geometric")
+    return gimm_match::match_geometric_pair(loaded, f.geometric, outputs);
+  GIMM_USAGE_CHECK(f.method == "learned", "--method "
+                                              << f.method
+                                              << " matches a dataset's pairs (it needs their "
+                                                 "masks or labels): give --dataset DIR");
+  return gimm_match::match_learned_pair(learned_choice(app, f), f.options, loaded, f.class_a,
+                                        f.class_b, outputs);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"gimm-match: coronary point matches between two angiograms (GIMM matcher)",
+               "gimm-match"};
+  Flags f;
+  add_input_flags(app, f);
+  add_method_flags(app, f);
+  add_tree_and_dicom_flags(app, f);
+  add_learned_and_output_flags(app, f);
   gimm::cli::option_flags() = {{"DicomReadOptions::pitch_mm", "--pixel-a, --pixel-b"},
                                {"MatchRunOptions::images", "--images"},
                                {"MatchRunOptions::camera_error", "--camera-error-deg/-mm"},
@@ -280,227 +532,22 @@ int main(int argc, char** argv) {
                                {"ImageDegradation::blur_px", "--blur-px"}};
   return gimm::cli::run(app, argc, argv, [&] {
     gimm::cli::keep_freed_memory();
-    gimm::cli::refuse_outputs_over_inputs(
-        {{"--out", out}, {"--picture", picture}, {"--tree", tree}, {"--tree-vtk", tree_vtk}},
-        {{"--image-a", image_a},
-         {"--image-b", image_b},
-         {"--camera-a", camera_a},
-         {"--camera-b", camera_b},
-         {"--dicom-a", dicom_a},
-         {"--dicom-b", dicom_b},
-         {"--weights", weights},
-         {"--dataset", dataset}},
-        true);
+    gimm::cli::refuse_outputs_over_inputs({{"--out", f.out},
+                                           {"--picture", f.picture},
+                                           {"--tree", f.tree},
+                                           {"--tree-vtk", f.tree_vtk}},
+                                          {{"--image-a", f.image_a},
+                                           {"--image-b", f.image_b},
+                                           {"--camera-a", f.camera_a},
+                                           {"--camera-b", f.camera_b},
+                                           {"--dicom-a", f.dicom_a},
+                                           {"--dicom-b", f.dicom_b},
+                                           {"--weights", f.weights},
+                                           {"--dataset", f.dataset}},
+                                          true);
     const auto start = std::chrono::steady_clock::now();
-    options.gate.mode = gimm::parse_gate_mode(gate);
-    // The learned matcher's weights (given or shipped) and the flags given for it; what no flag
-    // sets comes from the weights' record (examples/match/match_learned.cpp).
-    const auto learned_choice = [&] {
-      gimm_match::LearnedChoice choice;
-      choice.weights = weights.empty() ? gimm::cli::default_weights() : weights;
-      if (threshold_flag->count()) choice.threshold = threshold;
-      if (input_size_flag->count()) choice.input_size = input_size;
-      // Real DICOM geometry keeps its own wider --delta default, set below.
-      if (app.count("--gate")) choice.gate.mode = options.gate.mode;
-      if (app.count("--delta") || !dicom_a.empty()) choice.gate.delta_px = options.gate.delta_px;
-      if (app.count("--snap")) choice.gate.snap = options.snap_to_epipolar;
-      choice.gate_name = gate;
-      choice.max_reprojection = max_reprojection;
-      return choice;
-    };
-    // A flag of one method given to another would be silently ignored: refuse it instead.
-    const std::pair<const char*, const char*> method_flags[] = {{"--tolerance", "geometric"},
-                                                                {"--order-cost", "geometric"},
-                                                                {"--junction-mm", "geometric"},
-                                                                {"--min-confidence", "geometric"},
-                                                                {"--segment", "geometric"},
-                                                                {"--exact-vesselness", "geometric"},
-                                                                {"--keep-catheter", "geometric"},
-                                                                {"--sigma", "oracle"},
-                                                                {"--max-points", "epipolar"},
-                                                                {"--gate", "learned"},
-                                                                {"--tau", "learned"},
-                                                                {"--delta", "learned"},
-                                                                {"--snap", "learned"},
-                                                                {"--threshold", "learned"},
-                                                                {"--input-size", "learned"},
-                                                                {"--max-reprojection", "learned"},
-                                                                {"--class-a", "learned"},
-                                                                {"--class-b", "learned"},
-                                                                {"--system", "learned"}};
-    for (const auto& [flag, owner] : method_flags)
-      GIMM_USAGE_CHECK(app.count(flag) == 0 || method == owner,
-                       flag << " is for --method " << owner << ", not " << method);
-    GIMM_USAGE_CHECK(weights.empty() || method == "learned",
-                     "--weights is for --method learned, not " << method);
-    // Gate flags the chosen gate does not use would be ignored: refuse them.
-    if (app.count("--gate")) {
-      GIMM_USAGE_CHECK(gate != "none" || ((app.count("--snap") == 0 || !options.snap_to_epipolar) &&
-                                          app.count("--delta") == 0 && app.count("--tau") == 0),
-                       "--gate none: --snap, --delta and --tau need a gate");
-      GIMM_USAGE_CHECK(gate != "hard" || app.count("--tau") == 0,
-                       "--tau is the soft/logit gates' temperature, not --gate hard's");
-      GIMM_USAGE_CHECK((gate != "soft" && gate != "logit") || app.count("--delta") == 0,
-                       "--delta is --gate hard's threshold, not --gate " << gate << "'s");
-    }
-    GIMM_USAGE_CHECK(!keep_catheter || segment || dataset.empty(),
-                     "--keep-catheter is about segmented chains: with --dataset it needs "
-                     "--segment (without it the matcher uses the vessel masks)");
-    if (keep_catheter) geometric.catheter.min_length_mm = 0, geometric.catheter.field_edge_px = 0;
-    GIMM_USAGE_CHECK(
-        app.count("--exact-vesselness") == 0 || segment || dataset.empty(),
-        "--exact-vesselness changes the segmentation: with --dataset it needs --segment "
-        "(without it the matcher uses the vessel masks)");
-    // Every mode segments with it: a dataset (--segment), a pair of images, a pair of DICOMs.
-    geometric.segmentation.vesselness.exact_derivatives = exact_vesselness;
-    if (app.count("--min-confidence"))  // whichever of the two thresholds the mode uses
-      geometric.min_confidence = geometric.min_confidence_segmented = min_confidence;
-    if (!dataset.empty()) {
-      GIMM_USAGE_CHECK(image_a.empty() && image_b.empty() && camera_a.empty() && camera_b.empty() &&
-                           dicom_a.empty() && dicom_b.empty() && picture.empty() && pair.empty() &&
-                           tree.empty() && tree_vtk.empty() && class_a == 0 && class_b == 0,
-                       "--dataset matches a whole dataset (classes and cameras from its files); it "
-                       "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
-                       "--picture or --tree/--tree-vtk");
-      GIMM_USAGE_CHECK(!out.empty(), "--dataset needs --out PRED_DIR");
-      std::unique_ptr<gimm::PairMatcher> matcher;
-      if (method == "learned") {
-        matcher = gimm_match::learned_matcher(learned_choice(), options);
-      } else if (method == "geometric") {
-        GIMM_USAGE_CHECK(geometry == "cameras",
-                         "--method geometric needs the cameras (--geometry "
-                         "cameras), got --geometry "
-                             << geometry);
-        geometric.use_masks = !segment;
-        matcher = gimm_match::geometric_matcher(geometric);
-      } else {
-        GIMM_USAGE_CHECK(std::isfinite(sigma) && sigma >= 0, "--sigma must be >= 0, got " << sigma);
-        matcher = gimm::baseline_matcher(method, sigma, epi, seed);
-      }
-      gimm::MatchRunOptions run;
-      run.split = split;
-      run.use_cameras = geometry == "cameras";
-      run.images = images == "formed"     ? gimm::DatasetImages::formed
-                   : images == "rendered" ? gimm::DatasetImages::rendered
-                                          : gimm::DatasetImages::automatic;
-      run.camera_error = camera_error;
-      run.degradation = degradation;
-      run.seed = seed;
-      run.report = gimm::stderr_reporter(false, "gimm-match: ");
-      const gimm::DatasetReader reader(dataset);
-      gimm::cli::flag_value("", [&] { run.validate(*matcher, reader); });
-      const gimm::MatchRunSummary done = gimm::match_dataset(*matcher, dataset, out, run);
-      std::printf("gimm-match: %zu pairs, %zu matches -> %s\n", done.pairs, done.matches,
-                  out.c_str());
-      // Said, not silent: the reference's estimate needs min_matches (32) matches, and a pair
-      // without F is written ungated.
-      const bool estimates_F =
-          method == "learned" && geometry == "matches" && options.gate.mode != gimm::GateMode::none;
-      if (estimates_F && done.without_F > 0)
-        std::printf(
-            "gimm-match: --geometry matches: no F for %zu of %zu pairs (fewer than %d "
-            "matches, or a degenerate fit); those pairs are not gated\n",
-            done.without_F, done.pairs, options.gate.min_matches);
-      return 0;
-    }
-    // One pair: from DICOM files, or from PNG images and camera JSON files.
-    for (const char* flag :
-         {"--camera-error-deg", "--camera-error-mm", "--noise-photons", "--blur-px", "--images"})
-      GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " is for the dataset mode (--dataset)");
-    for (const auto& [flag, frame] : {std::pair{"--frame-a", frame_a}, {"--frame-b", frame_b}})
-      GIMM_USAGE_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
-    GIMM_USAGE_CHECK(app.count("--max-reprojection") == 0 || max_reprojection > 0,
-                     "--max-reprojection must be > 0 px, got " << max_reprojection);
-    gimm_match::LoadedPair loaded_pair;
-    if (!dicom_a.empty() || !dicom_b.empty()) {
-      GIMM_USAGE_CHECK(!dicom_a.empty() && !dicom_b.empty(), "give both --dicom-a and --dicom-b");
-      GIMM_USAGE_CHECK(image_a.empty() && image_b.empty(),
-                       "--dicom-a/b carry the images: no --image-a/b");
-      GIMM_USAGE_CHECK(
-          isocenter.empty() || (isocenter_a.empty() && isocenter_b.empty()),
-          "--isocenter sets both views' isocentre: give it or --isocenter-a/-b, not both");
-      gimm::DicomPairOptions o;
-      const auto vec3 = [](const std::vector<double>& v) -> std::optional<Eigen::Vector3d> {
-        if (v.empty()) return std::nullopt;
-        return Eigen::Vector3d(v[0], v[1], v[2]);
-      };
-      for (auto [s, frame, pixel, table, iso, camera, flag_pixel] :
-           {std::tuple{&o.a, frame_a, pixel_a, &table_a, &isocenter_a, &camera_a, "--pixel-a"},
-            {&o.b, frame_b, pixel_b, &table_b, &isocenter_b, &camera_b, "--pixel-b"}}) {
-        if (frame >= 0) s->frame = frame;
-        if (app.count(flag_pixel)) s->pitch_mm = pixel;
-        s->table_mm = vec3(*table);
-        s->isocenter = vec3(isocenter.empty() ? *iso : isocenter);
-        s->camera = read_camera(*camera);
-      }
-      if (!system_name.empty()) o.system = gimm::parse_coronary_system(system_name);
-      const bool classes_given = app.count("--class-a") && app.count("--class-b");
-      o.need_classes = method == "learned" && !classes_given;
-      o.need_system = o.need_classes;
-      const gimm::DicomPair dp = gimm::load_dicom_pair(dicom_a, dicom_b, o);
-      for (const auto& w : dp.warnings) std::cerr << "gimm-match: warning: " << w << "\n";
-      for (const auto* v : {&dp.a, &dp.b}) {
-        const bool is_a = v == &dp.a;
-        const gimm::XaFrame& f = v->frame;
-        std::cout << "gimm-match: view " << (is_a ? "A" : "B") << ": " << f.path << " frame "
-                  << f.frame << "/" << f.frames << ", " << f.carm.cols << "x" << f.carm.rows
-                  << ", primary " << f.carm.primary_deg << ", secondary " << f.carm.secondary_deg
-                  << " deg, table " << f.table_source << "; field " << v->field_source;
-        if (o.need_classes) {
-          (is_a ? class_a : class_b) = v->view_class;
-          std::cout << "; " << v->class_note;
-        }
-        for (const auto& c : v->corrections) std::cout << "; " << c;
-        std::cout << "\n";
-      }
-      loaded_pair = {dp.a.frame.image, dp.b.frame.image, dp.a.camera,
-                     dp.b.camera,      dp.a.field,       dp.b.field};
-      // Real C-arm geometry: true correspondences lie ~2 px (median) and ~4.5 px (90th
-      // percentile) off their epipolar lines; 5 px keeps ~93% of them (docs/dicom.md).
-      if (app.count("--delta") == 0) options.gate.delta_px = 5.0;
-      if (app.count("--tolerance") == 0) geometric.epipolar_tolerance_px = 5.0;
-      std::cout << "gimm-match: real geometry: gate " << options.gate.delta_px
-                << " px, geometric tolerance " << geometric.epipolar_tolerance_px << " px\n";
-    } else {
-      GIMM_USAGE_CHECK(
-          !image_a.empty() && !image_b.empty(),
-          "give --image-a and --image-b (or --dicom-a and --dicom-b, or --dataset DIR)");
-      for (const char* flag : {"--frame-a", "--frame-b", "--system", "--isocenter", "--isocenter-a",
-                               "--isocenter-b", "--table-a", "--table-b", "--pixel-a", "--pixel-b"})
-        GIMM_USAGE_CHECK(app.count(flag) == 0, flag << " goes with --dicom-a/b");
-      GIMM_USAGE_CHECK(camera_a.empty() == camera_b.empty(),
-                       "give both --camera-a and --camera-b (the pair's geometry), or neither");
-      loaded_pair.a = read_view_png("--image-a", image_a);
-      loaded_pair.b = read_view_png("--image-b", image_b);
-      loaded_pair.camera_a = read_camera(camera_a);
-      loaded_pair.camera_b = read_camera(camera_b);
-      // A PNG carries no shutter: the exposed fields are found in the images.
-      loaded_pair.field_a = gimm::exposed_field(loaded_pair.a);
-      loaded_pair.field_b = gimm::exposed_field(loaded_pair.b);
-    }
-    if (loaded_pair.camera_a && loaded_pair.camera_b) {
-      try {  // two views from one place (a file given twice) have no epipolar geometry
-        static_cast<void>(
-            gimm::fundamental_from_cameras(*loaded_pair.camera_a, *loaded_pair.camera_b));
-      } catch (const gimm::Error& e) {
-        const std::string a = camera_a.empty() ? "--dicom-a " + dicom_a : "--camera-a " + camera_a;
-        const std::string b = camera_b.empty() ? "--dicom-b " + dicom_b : "--camera-b " + camera_b;
-        throw gimm::Error(std::string(e.what()) + " (" + a + ", " + b + ")");
-      }
-    }
-    GIMM_USAGE_CHECK(method != "geometric" || (loaded_pair.camera_a && loaded_pair.camera_b),
-                     "--method geometric on one pair needs the cameras: --camera-a and "
-                     "--camera-b (or --dicom-a and --dicom-b)");
-    GIMM_USAGE_CHECK((tree.empty() && tree_vtk.empty()) || loaded_pair.camera_a,
-                     "--tree and --tree-vtk triangulate with the cameras: give --camera-a/b");
-    const gimm_match::PairOutputs outputs{pair, out, picture, tree, tree_vtk, start};
-    if (method == "geometric")
-      return gimm_match::match_geometric_pair(loaded_pair, geometric, outputs);
-    GIMM_USAGE_CHECK(method == "learned", "--method "
-                                              << method
-                                              << " matches a dataset's pairs (it needs their "
-                                                 "masks or labels): give --dataset DIR");
-    return gimm_match::match_learned_pair(learned_choice(), options, loaded_pair, class_a, class_b,
-                                          outputs);
+    f.options.gate.mode = gimm::parse_gate_mode(f.gate);
+    check_method_flags(app, f);
+    return f.dataset.empty() ? match_one_pair(app, f, start) : match_dataset_mode(app, f);
   });
 }

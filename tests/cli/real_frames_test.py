@@ -7,7 +7,8 @@ ungated, the share within 5 px of the epipolar line of the pair's exported geome
 is not recorded: that geometry is tens of px off, docs/dicom.md). Skips cleanly without
 ../shared. The images stay in ../shared: PNG copies go to TMP only.
 
-Usage: real_frames_test.py BIN_DIR TMP_DIR
+Usage: real_frames_test.py BIN_DIR TMP_DIR [WEIGHTS]
+(WEIGHTS: the learned matcher's weights to measure; default the shipped ones.)
 """
 import json
 import os
@@ -25,6 +26,7 @@ import realism  # noqa: E402
 from harness import Harness  # noqa: E402
 
 BIN, TMP = sys.argv[1], sys.argv[2]
+WEIGHTS = ["--weights", sys.argv[3]] if len(sys.argv) > 3 else []
 CLINICAL = os.path.normpath(os.path.join(ROOT, "..", "shared", "data", "clinical-xa"))
 if not os.path.isdir(CLINICAL):
     print(f"skipped: {CLINICAL} is absent (the real frames live beside the project)")
@@ -71,7 +73,7 @@ for sample, fa, na, fb, nb, class_a, class_b in PAIRS:
     F = np.array(json.loads(h.run("gimm-carm", "--pair", cam_a, cam_b).stdout)["F"])
     for method, extra in (("geometric", ["--tolerance", 5]),
                           ("learned", ["--gate", "none", "--class-a", class_a,
-                                       "--class-b", class_b])):
+                                       "--class-b", class_b, *WEIGHTS])):
         out = T(f"{sample}.{method}.json")
         h.run("gimm-match", "--image-a", png_a, "--image-b", png_b, "--camera-a", cam_a,
               "--camera-b", cam_b, "--method", method, *extra, "--out", out)
