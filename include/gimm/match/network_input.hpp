@@ -16,8 +16,9 @@
 ///   (match/vesselness.hpp), shown as 1 - sqrt(V). Vessels stay dark on a bright ground as in an
 ///   intensity image (weights trained on intensities are a fair start), and the square root
 ///   lifts the faint distal vessels that V's peaked distribution leaves near 0. Heart shadow,
-///   ribs, lungs, the shutter's edge and quantum noise, which differ most between synthetic and
-///   real frames, are mostly gone from it.
+///   ribs, lungs and shutter edges, where synthetic and real frames differ most, are much
+///   reduced; a real frame's fine background texture stays (docs/images/network_input.png).
+///   Trained once, it did worse than intensities (weights/README.md, "The vessel-enhanced input").
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
