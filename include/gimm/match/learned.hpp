@@ -111,15 +111,15 @@ inline PairMatchResult match_pair(const nn::Matcher& matcher, const PairInput& p
   pair.validate();
   const Image<float>& image_a = *pair.image_a;
   const Image<float>& image_b = *pair.image_b;
+  // Each image prepared once; both padded to the larger rows and columns (real angiograms of
+  // two runs may differ in size).
   const NetworkImage kind = network_image_kind(matcher.config().input);
-  NetworkInput a = to_network_input(image_a, options.input_size, kind, "image A");
-  NetworkInput b = to_network_input(image_b, options.input_size, kind, "image B");
-  if (a.tensor.shape() != b.tensor.shape()) {  // images of different sizes: one tensor size
-    const std::int64_t rows = std::max(a.tensor.dim(2), b.tensor.dim(2));
-    const std::int64_t cols = std::max(a.tensor.dim(3), b.tensor.dim(3));
-    a = to_network_input(image_a, options.input_size, kind, "image A", rows, cols);
-    b = to_network_input(image_b, options.input_size, kind, "image B", rows, cols);
-  }
+  NetworkInput a = prepare_network_input(image_a, options.input_size, kind, "image A");
+  NetworkInput b = prepare_network_input(image_b, options.input_size, kind, "image B");
+  const std::int64_t rows = std::max(a.padded_rows(), b.padded_rows());
+  const std::int64_t cols = std::max(a.padded_cols(), b.padded_cols());
+  pad_network_input(a, rows, cols);
+  pad_network_input(b, rows, cols);
   const nn::MatcherOutput net = matcher.match(a.tensor, b.tensor, pair.class_a, pair.class_b);
 
   PairMatchResult result;

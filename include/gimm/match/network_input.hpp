@@ -63,9 +63,12 @@ inline Image<float> network_image(const Image<float>& image, NetworkImage kind) 
 
 /// One image as the network sees it.
 struct NetworkInput {
+  Image<float> content;                    ///< resized and turned into the input kind
   nn::Tensor tensor;                       ///< [1, 1, rows, cols], rows and cols multiples of 8
   int content_rows = 0, content_cols = 0;  ///< the resized image inside the padding
   double scale_u = 1, scale_v = 1;         ///< image pixels per network pixel
+  std::int64_t padded_rows() const { return (content_rows + 7) / 8 * 8; }
+  std::int64_t padded_cols() const { return (content_cols + 7) / 8 * 8; }
 };
 
 /// Bilinear resampling with pixel centres aligned (PyTorch align_corners=False).
@@ -89,11 +92,10 @@ inline Image<float> resize_bilinear(const Image<float>& image, int rows, int col
   return out;
 }
 
-/// `image` resized to `input_size` (0: its own size), turned into `kind`, and zero-padded to
-/// `pad_rows` x `pad_cols` (0: the content's own size rounded up to 8).
-inline NetworkInput to_network_input(const Image<float>& image, int input_size, NetworkImage kind,
-                                     const std::string& name, std::int64_t pad_rows = 0,
-                                     std::int64_t pad_cols = 0) {
+/// `image` resized to `input_size` (0: its own size) and turned into `kind`; not padded yet
+/// (pad_network_input). Checks every pixel is finite, naming `name` and the pixel.
+inline NetworkInput prepare_network_input(const Image<float>& image, int input_size,
+                                          NetworkImage kind, const std::string& name) {
   GIMM_CHECK(image.rows() > 0 && image.cols() > 0, name << ": the image is empty");
   GIMM_CHECK(input_size >= 0, "input_size must be >= 0, got " << input_size);
   for (int r = 0; r < image.rows(); ++r)  // before resizing spreads a NaN over its neighbours
@@ -101,29 +103,43 @@ inline NetworkInput to_network_input(const Image<float>& image, int input_size, 
       GIMM_CHECK(std::isfinite(image(r, c)),
                  name << ": pixel (" << r << ", " << c << ") is " << image(r, c));
   NetworkInput in;
-  Image<float> content = image;
+  in.content = image;
   if (input_size > 0) {
     const double scale = double(input_size) / std::max(image.rows(), image.cols());
     const int rows = std::max(1, int(std::lround(image.rows() * scale)));
     const int cols = std::max(1, int(std::lround(image.cols() * scale)));
-    if (rows != image.rows() || cols != image.cols()) content = resize_bilinear(image, rows, cols);
+    if (rows != image.rows() || cols != image.cols())
+      in.content = resize_bilinear(image, rows, cols);
   }
-  in.content_rows = content.rows();
-  in.content_cols = content.cols();
+  in.content_rows = in.content.rows();
+  in.content_cols = in.content.cols();
   GIMM_CHECK(in.content_rows >= 8 && in.content_cols >= 8,
              name << ": " << image.cols() << "x" << image.rows() << " px resized to "
                   << in.content_cols << "x" << in.content_rows << " (input size " << input_size
                   << ") is too small for the matcher (at least 8x8 pixels; a very long, thin "
                      "image?)");
-  content = network_image(content, kind);
+  if (kind != NetworkImage::intensity) in.content = network_image(in.content, kind);
   in.scale_u = double(image.cols()) / in.content_cols;
   in.scale_v = double(image.rows()) / in.content_rows;
-  const std::int64_t rows = std::max<std::int64_t>(pad_rows, (in.content_rows + 7) / 8 * 8);
-  const std::int64_t cols = std::max<std::int64_t>(pad_cols, (in.content_cols + 7) / 8 * 8);
-  GIMM_CHECK(rows % 8 == 0 && cols % 8 == 0, name << ": padded size must be a multiple of 8");
+  return in;
+}
+
+/// The tensor of a prepared input, zero-padded to `rows` x `cols` (multiples of 8, at least the
+/// content's padded size).
+inline void pad_network_input(NetworkInput& in, std::int64_t rows, std::int64_t cols) {
+  GIMM_CHECK(rows % 8 == 0 && cols % 8 == 0 && rows >= in.padded_rows() && cols >= in.padded_cols(),
+             "network input: cannot pad " << in.content_cols << "x" << in.content_rows << " to "
+                                          << cols << "x" << rows);
   in.tensor = nn::Tensor({1, 1, rows, cols});
   for (int r = 0; r < in.content_rows; ++r)
-    for (int c = 0; c < in.content_cols; ++c) in.tensor[r * cols + c] = content(r, c);
+    for (int c = 0; c < in.content_cols; ++c) in.tensor[r * cols + c] = in.content(r, c);
+}
+
+/// prepare_network_input, then padded to the content's own size rounded up to 8.
+inline NetworkInput to_network_input(const Image<float>& image, int input_size, NetworkImage kind,
+                                     const std::string& name) {
+  NetworkInput in = prepare_network_input(image, input_size, kind, name);
+  pad_network_input(in, in.padded_rows(), in.padded_cols());
   return in;
 }
 
