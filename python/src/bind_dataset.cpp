@@ -52,17 +52,11 @@ std::unique_ptr<PairMatcher> dataset_matcher(const py::object& matcher, const py
       o.epipolar_tolerance_px = take("tolerance_px", o.epipolar_tolerance_px);
       if (take("keep_catheter", false)) o.catheter.min_length_mm = 0, o.catheter.field_edge_px = 0;
       out = std::make_unique<GeometricMatcher>(o);
-    } else if (method == "oracle") {
-      const double sigma = take("sigma_px", 1.0);
-      if (!(std::isfinite(sigma) && sigma >= 0))
-        throw py::value_error("match_dataset: sigma_px must be finite and >= 0, got " +
-                              std::to_string(sigma));
-      out = std::make_unique<OracleMatcher>(sigma, seed);
-    } else if (method == "epipolar") {
+    } else if (method == "oracle" || method == "epipolar") {
       EpipolarBaselineOptions o;
-      o.max_points = take("max_points", o.max_points);
-      if (o.max_points == 0) throw py::value_error("match_dataset: max_points must be > 0");
-      out = std::make_unique<EpipolarMatcher>(o, seed);
+      const double sigma = method == "oracle" ? take("sigma_px", 1.0) : 1.0;
+      if (method == "epipolar") o.max_points = take("max_points", o.max_points);
+      out = options_checked("match_dataset", [&] { return baseline_matcher(method, sigma, o, seed); });
     } else {
       throw py::value_error(
           "match_dataset: matcher must be a gimm.Matcher or 'geometric', 'epipolar' or 'oracle', "

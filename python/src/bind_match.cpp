@@ -156,23 +156,17 @@ void bind_match(py::module_& m) {
         const PairTruth t = truth_from(truth, 3.0, "truth");
         if (method != "epipolar" && method != "oracle")
           throw py::value_error("method must be 'epipolar' or 'oracle', got '" + method + "'");
-        if (!(std::isfinite(sigma_px) && sigma_px >= 0))
-          throw py::value_error("sigma_px must be finite and >= 0, got " +
-                                std::to_string(sigma_px));
-        if (max_points == 0) throw py::value_error("max_points must be > 0");
+        EpipolarBaselineOptions o;
+        o.max_points = max_points;
+        const std::unique_ptr<PairMatcher> matcher = options_checked(
+            "match_baseline", [&] { return baseline_matcher(method, sigma_px, o, seed); });
         PairInput input;
         input.id = t.id;
         input.truth = &t;
         PairMatches matches;
         {
           py::gil_scoped_release release;
-          if (method == "oracle") {
-            matches = OracleMatcher(sigma_px, seed).match(input);
-          } else {
-            EpipolarBaselineOptions o;
-            o.max_points = max_points;
-            matches = EpipolarMatcher(o, seed).match(input);
-          }
+          matches = matcher->match(input);
         }
         py::dict d = matches_dict(std::move(matches));
         d.attr("pop")("pair");

@@ -75,6 +75,17 @@ py::array_t<T> adopt_vector(std::vector<T>&& values) {
 
 // ---- small arrays: points, vectors, matrices (copied, converted to float64) ---------------
 
+/// make() run with its option checks raised as ValueError (a bad argument, not a failed run),
+/// the message led by `function`.
+template <class Make>
+auto options_checked(const std::string& function, Make&& make) {
+  try {
+    return make();
+  } catch (const gimm::Error& e) {
+    throw py::value_error(function + ": " + e.what());
+  }
+}
+
 inline std::string shape_of(const py::array& a) {
   std::string s = "(";
   for (py::ssize_t d = 0; d < a.ndim(); ++d)

@@ -300,3 +300,33 @@ TEST_CASE("Learned matcher: matches with an end outside its exposed field are dr
   CHECK(inside.dropped_outside_field == static_cast<int>(whole.matches.size() - expected));
   for (const auto& p : inside.matches.points_a) CHECK(std::lround(p.x()) < a.cols() / 2);
 }
+
+TEST_CASE("Matcher interface: no method's match ends outside an exposed field", "[match]") {
+  // The baselines read the labels, which span the whole image; run() drops what the detector did
+  // not see, for every method, and counts it.
+  const gimm::PairTruth t = crossing_truth();  // A: column 10, rows 2-29; B: row 12
+  gimm::PairInput input;
+  input.id = t.id;
+  input.truth = &t;
+  const gimm::OracleMatcher oracle(0.0, 7);
+  const gimm::PairMatchResult whole = oracle.run(input);
+  REQUIRE(whole.matches.size() == t.dense.size());
+  CHECK(whole.dropped_outside_field == 0);
+  gimm::Image<std::uint8_t> top(32, 32), all(32, 32, 1);  // A's field: rows 0-15
+  for (int r = 0; r < 16; ++r)
+    for (int c = 0; c < 32; ++c) top(r, c) = 1;
+  input.field_a = &top;
+  input.field_b = &all;
+  gimm::PairInput open = input;
+  open.field_a = open.field_b = nullptr;
+  const gimm::EpipolarMatcher epipolar({}, 7);
+  for (const gimm::PairMatcher* m : {static_cast<const gimm::PairMatcher*>(&oracle),
+                                     static_cast<const gimm::PairMatcher*>(&epipolar)}) {
+    INFO(m->name());
+    const gimm::PairMatchResult r = m->run(input);
+    REQUIRE(r.matches.size() > 0);
+    for (const auto& p : r.matches.points_a) CHECK(p.y() < 15.5);
+    CHECK(r.matches.size() + r.dropped_outside_field == m->run(open).matches.size());
+    if (m == &oracle) CHECK(r.dropped_outside_field == 14);  // rows 16-29 of A's vessel
+  }
+}

@@ -31,7 +31,7 @@ namespace gimm {
 
 inline PairMatches oracle_matches(const PairTruth& truth, double sigma_px, Rng& rng) {
   GIMM_CHECK(std::isfinite(sigma_px) && sigma_px >= 0,
-             "oracle: sigma must be finite and >= 0, got " << sigma_px);
+             "oracle: sigma_px must be finite and >= 0, got " << sigma_px);
   PairMatches m;
   m.pair = truth.id;
   for (const auto& c : truth.dense) {
@@ -42,9 +42,15 @@ inline PairMatches oracle_matches(const PairTruth& truth, double sigma_px, Rng& 
 }
 
 struct EpipolarBaselineOptions {
-  std::size_t max_points = 300;  ///< A pixels sampled
+  std::size_t max_points = 300;  ///< A pixels sampled, > 0
   double band_px = 1.0;          ///< B pixels within this distance of the line are candidates
   double gap_px = 2.0;           ///< a larger gap along the line starts a new crossing
+  void validate() const {
+    GIMM_CHECK(max_points > 0, "epipolar baseline: max_points must be > 0");
+    GIMM_CHECK(std::isfinite(band_px) && band_px >= 0 && std::isfinite(gap_px) && gap_px >= 0,
+               "epipolar baseline: band_px and gap_px must be finite and >= 0, got "
+                   << band_px << " and " << gap_px);
+  }
 };
 
 /// The vessel pixels of a mask as (u, v) = (column, row), row-major.
@@ -84,7 +90,7 @@ inline PairMatches epipolar_matches(const PairTruth& truth, const EpipolarBaseli
                                     Rng& rng) {
   GIMM_CHECK(truth.mask_a && truth.mask_b,
              "epipolar baseline: pair " << truth.id << " has no masks");
-  GIMM_CHECK(o.band_px >= 0 && o.gap_px >= 0, "epipolar baseline: band and gap must be >= 0");
+  o.validate();
   PairMatches m;
   m.pair = truth.id;
   std::vector<Eigen::Vector2d> a_pixels = mask_pixels(*truth.mask_a);
@@ -127,10 +133,15 @@ PairMatchResult baseline_result(Make make) {
 /// The oracle behind the matcher interface (dataset mode: it reads the pair's labels).
 class OracleMatcher : public PairMatcher {
  public:
-  OracleMatcher(double sigma_px, std::uint64_t seed) : sigma_(sigma_px), seed_(seed) {}
+  OracleMatcher(double sigma_px, std::uint64_t seed) : sigma_(sigma_px), seed_(seed) {
+    GIMM_CHECK(std::isfinite(sigma_px) && sigma_px >= 0,
+               "oracle: sigma_px must be finite and >= 0, got " << sigma_px);
+  }
   std::string name() const override { return "oracle"; }
   bool needs_images() const override { return false; }
-  PairMatchResult run(const PairInput& pair) const override {
+
+ protected:
+  PairMatchResult run_method(const PairInput& pair) const override {
     GIMM_CHECK(pair.truth, "oracle: pair '" << pair.id << "' has no labels (dataset mode only)");
     Rng rng = baseline_stream(seed_, name(), pair.id);
     return detail::baseline_result([&] { return oracle_matches(*pair.truth, sigma_, rng); });
@@ -145,10 +156,14 @@ class OracleMatcher : public PairMatcher {
 class EpipolarMatcher : public PairMatcher {
  public:
   EpipolarMatcher(EpipolarBaselineOptions options, std::uint64_t seed)
-      : options_(options), seed_(seed) {}
+      : options_(options), seed_(seed) {
+    options_.validate();
+  }
   std::string name() const override { return "epipolar"; }
   bool needs_images() const override { return false; }
-  PairMatchResult run(const PairInput& pair) const override {
+
+ protected:
+  PairMatchResult run_method(const PairInput& pair) const override {
     GIMM_CHECK(pair.truth,
                "epipolar: pair '" << pair.id << "' has no masks and F (dataset mode only)");
     Rng rng = baseline_stream(seed_, name(), pair.id);

@@ -707,9 +707,9 @@ class GeometricMatcher : public PairMatcher {
   std::string name() const override { return "geometric"; }
   // With masks it reads only them; segmenting, it reads the images.
   bool needs_images() const override { return !options_.use_masks; }
-  PairMatchResult run(const PairInput& pair) const override { return run_with_points(pair); }
   /// run()'s result with each match's triangulated point, A branch and margin (`points`, in
-  /// the order of result.matches). The matches carry the cameras' F, the one they follow.
+  /// the order of result.matches). The matches carry the cameras' F, the one they follow; none
+  /// lies outside the exposed fields (the views are cleared outside them first).
   GeometricPairResult run_with_points(const PairInput& pair) const {
     const auto start = std::chrono::steady_clock::now();
     GeometricPairResult r;
@@ -747,6 +747,9 @@ class GeometricMatcher : public PairMatcher {
     for (const auto& x : g) m.add(x.a, x.b, x.confidence);
     return m;
   }
+
+ protected:
+  PairMatchResult run_method(const PairInput& pair) const override { return run_with_points(pair); }
 
  private:
   GeometricOptions options_;

@@ -153,8 +153,10 @@ class LearnedMatcher : public PairMatcher {
   LearnedMatcher(nn::Matcher network, MatchOptions options)
       : network_(std::move(network)), options_(options) {}
   std::string name() const override { return "learned"; }
-  PairMatchResult run(const PairInput& pair) const override {
-    return match_pair(network_, pair, options_);
+
+ protected:
+  PairMatchResult run_method(const PairInput& pair) const override {
+    return match_pair(network_, pair, options_);  // drops outside the fields itself
   }
 
  private:

@@ -21,6 +21,7 @@
 #include "gimm/core/image.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/geometry/camera.hpp"
+#include "gimm/match/field_of_view.hpp"
 #include "gimm/match/matches.hpp"
 
 namespace gimm {
@@ -99,8 +100,20 @@ class PairMatcher {
   /// Whether run() reads the images (the baselines read the labels only; the geometric matcher
   /// with masks reads the masks).
   virtual bool needs_images() const { return true; }
-  virtual PairMatchResult run(const PairInput& pair) const = 0;
+  /// The pair matched: the method's matches, none with an end outside its view's exposed field
+  /// (a point the detector did not see cannot be matched, whichever method proposes it; the
+  /// drops are counted in dropped_outside_field).
+  PairMatchResult run(const PairInput& pair) const {
+    PairMatchResult r = run_method(pair);
+    r.dropped_outside_field +=
+        static_cast<int>(drop_outside_fields(r.matches, pair.field_a, pair.field_b));
+    return r;
+  }
   PairMatches match(const PairInput& pair) const { return run(pair).matches; }
+
+ protected:
+  /// The method itself, before the exposed-field rule of run().
+  virtual PairMatchResult run_method(const PairInput& pair) const = 0;
 };
 
 namespace detail {
