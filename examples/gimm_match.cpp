@@ -16,6 +16,8 @@
 //              [--system LCA|RCA] [--pixel-a/-b MM] [--table-a/-b L V G] [--isocenter-a/-b X Y Z]
 //              [--camera-a/-b C.json] [--out m.json] [--picture p.png] [--tree t.json]
 //              [--tree-vtk t.vtk]
+// Single pair with cameras: --landmark UA VA UB VB (repeatable) moves B's camera onto points
+// marked in both views (geometry/landmark_alignment.hpp), for pairs whose table is not recorded.
 // Single pair, either method: --tree/--tree-vtk write the matches triangulated with both cameras
 // (match/reconstruct.hpp; the learned matcher's dropped past --max-reprojection).
 // The matchers themselves are in examples/match/ (methods.hpp), one file each.
@@ -49,6 +51,7 @@
 #include "cli_common.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/geometry/epipolar.hpp"
+#include "gimm/geometry/landmark_alignment.hpp"
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/png.hpp"
@@ -96,6 +99,7 @@ struct Flags {
   std::string tree, tree_vtk, dicom_a, dicom_b, system_name;
   int frame_a = -1, frame_b = -1;
   std::vector<double> isocenter, isocenter_a, isocenter_b, table_a, table_b;
+  std::vector<double> landmarks;  // UA VA UB VB per --landmark
   double pixel_a = 0, pixel_b = 0;
   double max_reprojection = 0;
   float threshold = 0;
@@ -233,6 +237,13 @@ void add_tree_and_dicom_flags(CLI::App& app, Flags& f) {
       ->check(gimm::cli::at_least(0));
   app.add_option("--frame-b", f.frame_b, "frame of --dicom-b, 0-based (default: the middle one)")
       ->check(gimm::cli::at_least(0));
+  app.add_option("--landmark", f.landmarks,
+                 "single pair with cameras: UA VA UB VB, one point marked in both views, pixels "
+                 "(a catheter tip, an ostium, a bifurcation); B's C-arm is moved so that the "
+                 "landmarks lie on their epipolar lines (an unrecorded table move). Repeat it: two "
+                 "fix both directions across the baseline")
+      ->expected(4)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   app.add_option("--system", f.system_name,
                  "LCA|RCA: the injected system, for view classes from DICOM angles (default: the "
                  "nearest of all 11 classes)")
@@ -355,10 +366,11 @@ int match_dataset_mode(const CLI::App& app, Flags& f) {
   GIMM_USAGE_CHECK(f.image_a.empty() && f.image_b.empty() && f.camera_a.empty() &&
                        f.camera_b.empty() && f.dicom_a.empty() && f.dicom_b.empty() &&
                        f.picture.empty() && f.pair.empty() && f.tree.empty() &&
-                       f.tree_vtk.empty() && f.class_a == 0 && f.class_b == 0,
+                       f.tree_vtk.empty() && f.class_a == 0 && f.class_b == 0 &&
+                       f.landmarks.empty(),
                    "--dataset matches a whole dataset (classes and cameras from its files); it "
                    "takes no --image-a/b, --camera-a/b, --dicom-a/b, --class-a/b, --pair, "
-                   "--picture or --tree/--tree-vtk");
+                   "--picture, --tree/--tree-vtk or --landmark");
   GIMM_USAGE_CHECK(!f.out.empty(), "--dataset needs --out PRED_DIR");
   std::unique_ptr<gimm::PairMatcher> matcher;
   if (f.method == "learned") {
@@ -473,6 +485,33 @@ gimm_match::LoadedPair load_png_views(const CLI::App& app, const Flags& f) {
   return pair;
 }
 
+/// --landmark: B's camera moved onto the landmarks marked in both views, and what that did.
+void align_to_landmark_flags(const Flags& f, gimm_match::LoadedPair& pair) {
+  GIMM_USAGE_CHECK(f.landmarks.size() % 4 == 0,
+                   "--landmark takes 4 numbers each time (UA VA UB VB), got " << f.landmarks.size()
+                                                                              << " in all");
+  GIMM_USAGE_CHECK(pair.camera_a && pair.camera_b,
+                   "--landmark moves B's camera: give --camera-a/b (or --dicom-a/b)");
+  std::vector<Eigen::Vector2d> a, b;
+  for (std::size_t k = 0; k + 3 < f.landmarks.size(); k += 4) {
+    a.emplace_back(f.landmarks[k], f.landmarks[k + 1]);
+    b.emplace_back(f.landmarks[k + 2], f.landmarks[k + 3]);
+  }
+  const gimm::LandmarkAlignment r = gimm::cli::flag_value(
+      "--landmark", [&] { return gimm::align_to_landmarks(*pair.camera_a, *pair.camera_b, a, b); });
+  pair.camera_b = r.camera_b;
+  std::printf(
+      "gimm-match: B aligned to %zu landmark%s: its C-arm moved by (%.2f, %.2f, %.2f) mm "
+      "(what a table move of the opposite does)%s\n",
+      a.size(), a.size() == 1 ? "" : "s", r.shift_mm.x(), r.shift_mm.y(), r.shift_mm.z(),
+      r.constrained_directions < 2 ? "; one direction fixed, a second landmark fixes the "
+                                     "other"
+                                   : "");
+  for (std::size_t k = 0; k < a.size(); ++k)
+    std::printf("gimm-match: landmark %zu: %.1f -> %.1f px from its epipolar line in B\n", k + 1,
+                r.distance_before_px[k], r.distance_after_px[k]);
+}
+
 /// One pair, from DICOM files or from PNG images and camera JSON files.
 int match_one_pair(const CLI::App& app, Flags& f, std::chrono::steady_clock::time_point start) {
   for (const char* flag :
@@ -482,7 +521,7 @@ int match_one_pair(const CLI::App& app, Flags& f, std::chrono::steady_clock::tim
     GIMM_USAGE_CHECK(app.count(flag) == 0 || frame >= 0, flag << " must be >= 0, got " << frame);
   GIMM_USAGE_CHECK(app.count("--max-reprojection") == 0 || f.max_reprojection > 0,
                    "--max-reprojection must be > 0 px, got " << f.max_reprojection);
-  const gimm_match::LoadedPair loaded =
+  gimm_match::LoadedPair loaded =
       !f.dicom_a.empty() || !f.dicom_b.empty() ? load_dicom_views(app, f) : load_png_views(app, f);
   if (loaded.camera_a && loaded.camera_b) {
     try {  // two views from one place (a file given twice) have no epipolar geometry
@@ -495,6 +534,7 @@ int match_one_pair(const CLI::App& app, Flags& f, std::chrono::steady_clock::tim
       throw gimm::Error(std::string(e.what()) + " (" + a + ", " + b + ")");
     }
   }
+  if (!f.landmarks.empty()) align_to_landmark_flags(f, loaded);
   GIMM_USAGE_CHECK(f.method != "geometric" || (loaded.camera_a && loaded.camera_b),
                    "--method geometric on one pair needs the cameras: --camera-a and "
                    "--camera-b (or --dicom-a and --dicom-b)");

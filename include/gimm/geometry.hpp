@@ -1,5 +1,6 @@
 #pragma once
-/// The geometry room: C-arm cameras, epipolar geometry, F estimation, gating, triangulation.
+/// The geometry room: C-arm cameras, epipolar geometry, F estimation, gating, triangulation,
+/// a pair aligned to landmarks.
 #include "gimm/geometry/camera.hpp"
 #include "gimm/geometry/camera_error.hpp"
 #include "gimm/geometry/carm.hpp"
@@ -9,5 +10,6 @@
 #include "gimm/geometry/fundamental.hpp"
 #include "gimm/geometry/gate_options.hpp"
 #include "gimm/geometry/gating.hpp"
+#include "gimm/geometry/landmark_alignment.hpp"
 #include "gimm/geometry/triangulation.hpp"
 #include "gimm/geometry/two_rays.hpp"

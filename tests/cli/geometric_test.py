@@ -4,7 +4,8 @@ beats epipolar-nearest on Prec@3px and 2D mean by the margins measured when it w
 (Prec@3px 0.93 vs 0.49, 2D mean 2.2 vs 7.2 px on 24 patients; here pinned with slack), and on
 Prec@3px when it segments the images itself; one pair
 from images and cameras alone writes matches, the triangulated tree (JSON, VTK) and a picture;
-bad input fails cleanly and leaves nothing behind.
+--landmark puts a camera moved off its place back onto the labels' epipolar lines; bad input
+fails cleanly and leaves nothing behind.
 
 Usage: geometric_test.py BIN_DIR TMP_DIR
 """
@@ -12,6 +13,8 @@ import json
 import os
 import shutil
 import sys
+
+import numpy as np
 
 from harness import Harness
 
@@ -112,6 +115,45 @@ if os.path.exists(outs["vtk"]):
     check(vtk.startswith("# vtk DataFile") and "POLYDATA" in vtk and "LINES" in vtk,
           "tree.vtk is not VTK polydata with lines")
 
+# --landmark: B's camera 8 mm off (an unrecorded table move) puts the pair's labels pixels off
+# their epipolar lines under the F the matches carry; two landmarks from the labels put every
+# label back on its line (F is the cameras' F, so this checks the camera gimm-match used).
+with open(CB) as f:
+    cam = json.load(f)
+R, t = np.array(cam["R"]), np.array(cam["t"]).reshape(3)
+across = np.cross(R[2], [0, 0, 1])
+cam["t"] = list(t - R @ (8 * across / np.linalg.norm(across)))  # the source moved across B's axis
+del cam["P"]
+moved = os.path.join(TMP, "moved.camera.json")
+with open(moved, "w") as f:
+    json.dump(cam, f)
+with open(os.path.join(ds, "patients", "phantom-0000", "pairs", "LCA_00-01.json")) as f:
+    dense = np.array(json.load(f)["dense"])[:, :4]
+marks = [float(v) for k in (0, len(dense) // 2) for v in dense[k]]
+
+
+def label_distance(camera_b, *flags):
+    """The pair's labels' worst distance in B from their epipolar lines under the written F."""
+    out = os.path.join(TMP, "lm.json")
+    p = run("gimm-match", *pair[:-2], "--camera-b", camera_b, *flags, "--out", out)
+    with open(out) as f:
+        F = np.array(json.load(f)["F"])
+    lines = np.c_[dense[:, :2], np.ones(len(dense))] @ F.T
+    d = np.abs(np.sum(lines * np.c_[dense[:, 2:], np.ones(len(dense))], 1)) / np.hypot(
+        lines[:, 0], lines[:, 1])
+    return d.max(), p.stdout
+
+
+exact, _ = label_distance(CB)
+off, _ = label_distance(moved)
+aligned, said = label_distance(moved, "--landmark", *marks[:4], "--landmark", *marks[4:])
+print(f"--landmark: labels at most {exact:.3f} px off their lines with the exact camera, "
+      f"{off:.1f} px with B 8 mm off, {aligned:.3f} px aligned to two of them")
+check(off > 10, f"--landmark: B 8 mm off leaves the labels only {off:.2f} px off")
+check(aligned < 0.05, f"--landmark: aligned, the labels are {aligned:.3f} px off their lines")
+check("B aligned to 2 landmarks" in said and said.count("-> 0.0 px") == 2,
+      f"--landmark: report {said!r}")
+
 # Bad input: clear message naming what is wrong, no output left behind.
 other = os.path.join(TMP, "other.camera.json")
 with open(CB) as f:
@@ -156,6 +198,12 @@ cases = [
     ("negative min confidence", [*pair, "--min-confidence", -0.5],
      "--min-confidence: must be >= 0, got -0.5"),
     ("sigma for the learned matcher", ["--dataset", ds, "--sigma", 2], "--sigma is for --method oracle"),
+    ("landmark of 3 numbers", [*pair, "--landmark", 1, 2, 3], "--landmark takes 4 numbers"),
+    ("landmark without cameras", ["--image-a", A, "--image-b", B, "--landmark", 1, 2, 3, 4],
+     "--landmark moves B's camera"),
+    ("landmark off the detector", [*pair, "--landmark", 10, 10, 900, 10],
+     "--landmark: landmark alignment: landmark 1"),
+    ("landmark in dataset mode", ["--dataset", ds, "--landmark", 1, 2, 3, 4], "or --landmark"),
 ]
 for name, args, needle in cases:
     out = os.path.join(TMP, f"bad_{name.replace(' ', '_')}.json")
