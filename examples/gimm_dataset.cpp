@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
       phantom_size = "small", tree = "classic", style_name = "clinical";
   int phantom_count = 0;
   bool quiet = false;
+  gimm::LumenOptions lumen;
   std::string export_format;
   app.add_option("--input", input,
                  "folder (sub-folders included) of ImageCAS-style <id>.img<ext> + "
@@ -56,6 +57,14 @@ int main(int argc, char** argv) {
                  "small|imagecas|chest (the whole chest, for realistic views); default: the "
                  "style's (clinical: chest, drr: small)")
       ->check(CLI::IsMember({"small", "imagecas", "chest"}));
+  app.add_option("--stenoses", lumen.stenoses,
+                 "phantoms: focal stenoses (30-80% of the diameter, 4-12 mm) on that many main "
+                 "branches per patient, recorded in centerlines.json (anatomy/lumen.hpp)")
+      ->check(CLI::Range(0, 8));
+  app.add_option("--lumen-irregularity", lumen.irregularity,
+                 "phantoms: sigma of the lumen's wavering along the vessels (0.05-0.1 look like "
+                 "angiograms; default 0: a smooth taper)")
+      ->check(gimm::cli::in_range(0, 0.3, true));
   app.add_option("--tree", tree,
                  "classic|rich: the phantoms' coronary tree; rich adds septals, a conus, RV "
                  "and more branches (20-29) with Murray's-law calibres (docs/phantom.md); "
@@ -129,6 +138,10 @@ int main(int argc, char** argv) {
     if (tree != "classic" && !input.empty())
       throw CLI::ValidationError("--tree",
                                  "the tree is a phantom's; with --input it is the label's");
+    for (const char* flag : {"--stenoses", "--lumen-irregularity"})
+      if (app.count(flag) && !input.empty())
+        throw CLI::ValidationError(flag,
+                                   "the lumen is a phantom's; with --input it is the label's");
     if (phantom_size_given() && !input.empty())
       throw CLI::ValidationError("--phantom-size",
                                  "the size is a phantom's; with --input it is the volume's");
@@ -209,11 +222,16 @@ int main(int argc, char** argv) {
                     ? nlohmann::json{{"phantom", phantom_count}, {"phantom_size", phantom_size}}
                     : nlohmann::json{{"folder", input}};
     if (input.empty() && tree != "classic") run.input["phantom_tree"] = tree;
-    const std::vector<gimm::PatientSource> sources =
+    std::vector<gimm::PatientSource> sources =
         input.empty() ? gimm::phantom_sources(phantom_count, options.seed,
                                               gimm::parse_phantom_size(phantom_size),
                                               gimm::parse_tree_detail(tree))
                       : gimm::scan_imagecas_folder(input);
+    if (!lumen.none()) {
+      run.input["phantom_lumen"] = {{"stenoses", lumen.stenoses},
+                                    {"irregularity", lumen.irregularity}};
+      for (gimm::PatientSource& s : sources) s.phantom_lumen = lumen;
+    }
     if (!export_format.empty()) {  // ids the export cannot name: refused before any work
       std::vector<std::string> ids;
       for (const auto& source : sources) ids.push_back(source.id);

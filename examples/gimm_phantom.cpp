@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
   std::string out_dir, size = "small", dominance = "auto", tree = "classic";
   double noise = 15.0;
   bool preview = false;
+  gimm::LumenOptions lumen;
   app.add_option("--seed", seed, "patient seed")->required();
   app.add_option("--out", out_dir, "output directory (created if missing)")->required();
   app.add_option(
@@ -92,6 +93,15 @@ int main(int argc, char** argv) {
   app.add_option("--noise", noise, "scanner noise sigma, HU")
       ->check(gimm::cli::in_range(0, 1000, true))
       ->capture_default_str();
+  app.add_option("--stenoses", lumen.stenoses,
+                 "focal stenoses (30-80% of the diameter, 4-12 mm) on that many main branches")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
+  app.add_option("--lumen-irregularity", lumen.irregularity,
+                 "sigma of the lumen's wavering along the vessels (0.05-0.1 look like "
+                 "angiograms; 0: a smooth taper)")
+      ->check(gimm::cli::in_range(0, 0.3, true))
+      ->capture_default_str();
   app.add_flag("--preview", preview, "also write S.slice.png and S.mip.png");
   return gimm::cli::run(app, argc, argv, [&] {
     const auto t0 = std::chrono::steady_clock::now();
@@ -101,6 +111,7 @@ int main(int argc, char** argv) {
     options.dominance = gimm::parse_dominance(dominance);
     options.noise_hu = noise;
     options.tree = gimm::parse_tree_detail(tree);
+    options.lumen = lumen;
     const gimm::Phantom p = gimm::make_phantom(options);
     const auto t1 = std::chrono::steady_clock::now();
     nlohmann::json centerlines = gimm::to_json(p.centerlines);
@@ -112,6 +123,8 @@ int main(int argc, char** argv) {
                               {"tree", tree},
                               {"heart_height_mm", p.anatomy.height_mm},
                               {"heart_radius_mm", p.anatomy.radius_mm}};
+    if (!lumen.none())
+      centerlines["phantom"]["lumen"] = gimm::lumen_json(lumen, p.anatomy.stenoses);
     if (options.size == gimm::PhantomSize::chest)
       centerlines["phantom"]["chest"] = {{"left_dome_z_mm", p.anatomy.left_dome_z},
                                          {"right_dome_z_mm", p.anatomy.right_dome_z},

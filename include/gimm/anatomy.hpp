@@ -7,6 +7,7 @@
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/coronary_system.hpp"
 #include "gimm/anatomy/isocenter.hpp"
+#include "gimm/anatomy/lumen.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"

@@ -338,6 +338,21 @@ proc = run(["--input", TMP, "--vessels", "tubes", "--out", out], ok=False)
 check(proc.returncode == 2 and "--vessels" in proc.stderr and "phantom" in proc.stderr and
       not os.path.exists(out), f"--vessels tubes with --input: {proc.returncode} {proc.stderr}")
 
+# The lumen is a phantom's too; with phantoms the stenoses drawn are recorded per patient.
+for flag in (["--stenoses", "1"], ["--lumen-irregularity", "0.05"]):
+    out = os.path.join(TMP, "lumen_input")
+    proc = run(["--input", TMP, *flag, "--out", out], ok=False)
+    check(proc.returncode == 2 and flag[0] in proc.stderr and "phantom" in proc.stderr and
+          not os.path.exists(out), f"{flag[0]} with --input: {proc.returncode} {proc.stderr}")
+out = os.path.join(TMP, "lumen")
+run(["--phantom", "1", "--style", "drr", "--tree", "rich", "--rows", "64", "--cols", "64",
+     "--pixel", "3.0", "--stenoses", "2", "--lumen-irregularity", "0.05", "--quiet", "--out", out])
+with open(os.path.join(out, "patients", "phantom-0000", "centerlines.json")) as f:
+    lumen = json.load(f).get("phantom_lumen", {})
+check(len(lumen.get("stenoses", [])) == 2 and lumen.get("irregularity") == 0.05 and
+      all(0.3 <= s["severity"] <= 0.8 for s in lumen["stenoses"]),
+      f"--stenoses 2: centerlines.json records {lumen}")
+
 # --timings inside --out would put wall-clock seconds into the dataset: a usage error.
 out = os.path.join(TMP, "timings_inside")
 proc = run(COMMON + ["--out", out, "--timings", os.path.join(out, "t.jsonl")], ok=False)

@@ -10,9 +10,25 @@
 #include <string>
 
 #include "gimm/anatomy/centerlines.hpp"
+#include "gimm/anatomy/lumen.hpp"
 #include "gimm/io/files.hpp"
 
 namespace gimm {
+
+/// A phantom's lumen as drawn: {"irregularity": sigma, "irregularity_mm": mm, "stenoses":
+/// [{"branch": "LAD", "at_mm": arc length from the branch's start, "length_mm", "severity":
+/// diameter reduction 0..1}, ...]}.
+inline nlohmann::json lumen_json(const LumenOptions& o, const std::vector<Stenosis>& drawn) {
+  nlohmann::json stenoses = nlohmann::json::array();
+  for (const Stenosis& s : drawn)
+    stenoses.push_back({{"branch", s.branch},
+                        {"at_mm", s.at_mm},
+                        {"length_mm", s.length_mm},
+                        {"severity", s.severity}});
+  return {{"irregularity", o.irregularity},
+          {"irregularity_mm", o.irregularity_mm},
+          {"stenoses", stenoses}};
+}
 
 inline nlohmann::json to_json(const CenterlineTree& tree) {
   nlohmann::json branches = nlohmann::json::array();

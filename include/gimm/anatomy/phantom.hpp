@@ -36,6 +36,7 @@
 #include "gimm/anatomy/centerlines.hpp"
 #include "gimm/anatomy/chest.hpp"
 #include "gimm/anatomy/coronary_branches.hpp"
+#include "gimm/anatomy/lumen.hpp"
 #include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
@@ -110,6 +111,7 @@ struct PhantomOptions {
   Dominance dominance = Dominance::automatic;
   double noise_hu = 15.0;                 ///< scanner noise sigma; 0 for a noise-free volume
   TreeDetail tree = TreeDetail::classic;  ///< rich: side branches and Murray's-law calibres
+  LumenOptions lumen;                     ///< stenoses and an irregular calibre (none: smooth)
   std::optional<VolumeGeometry> grid;     ///< overrides `size` (any spacing, crop or direction)
 };
 
@@ -133,6 +135,7 @@ struct PhantomAnatomy {
   double left_dome_z = std::numeric_limits<double>::quiet_NaN();
   double right_dome_z = std::numeric_limits<double>::quiet_NaN();
   double t1_top_z = std::numeric_limits<double>::quiet_NaN();
+  std::vector<Stenosis> stenoses;  ///< as drawn (PhantomOptions::lumen)
 };
 
 struct Phantom {
@@ -357,6 +360,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   // HU are stored as int16: a sigma past its range saturates every voxel.
   GIMM_CHECK(std::isfinite(options.noise_hu) && options.noise_hu >= 0 && options.noise_hu <= 1000,
              "make_phantom: noise_hu must be in [0, 1000] HU, got " << options.noise_hu);
+  options.lumen.validate();
   Rng rng(options.seed);
   Phantom out;
   out.options = options;
@@ -540,6 +544,9 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     add_side_branches(tree, trace, inward, locate, A.long_axis, H, left_dom, right_dom, step,
                       branch_rng);
   }
+  // A stream of its own: the tree's course and everything else stay as they were.
+  Rng lumen_rng = Rng(options.seed).fork(0x10e3);
+  A.stenoses = shape_lumen(tree, options.lumen, lumen_rng);
   tree.validate("make_phantom");
 
   // --- Sample the grid.

@@ -148,6 +148,7 @@ struct PatientSource {
   std::optional<std::uint64_t> phantom_seed;
   PhantomSize phantom_size = PhantomSize::small;
   TreeDetail phantom_tree = TreeDetail::classic;
+  LumenOptions phantom_lumen;   ///< stenoses, irregular calibre (none: the smooth taper)
   std::string split = "train";  ///< train | val | test (assign_splits)
 };
 
@@ -263,6 +264,10 @@ inline nlohmann::json patient_run(const PatientSource& src, const DatasetOptions
     // Only when rich: a classic run's record (and its resumption) is as it always was.
     if (src.phantom_tree != TreeDetail::classic)
       input["phantom_tree"] = to_string(src.phantom_tree);
+    if (!src.phantom_lumen.none())
+      input["phantom_lumen"] = {{"stenoses", src.phantom_lumen.stenoses},
+                                {"irregularity", src.phantom_lumen.irregularity},
+                                {"irregularity_mm", src.phantom_lumen.irregularity_mm}};
   } else
     input = {{"image", src.image.filename().string()}, {"label", src.label.filename().string()}};
   return {{"parameters", o.to_json()}, {"input", input}, {"split", src.split}};
@@ -393,6 +398,7 @@ inline PatientVolumes read_patient(const PatientSource& src) {
     po.seed = *src.phantom_seed;
     po.size = src.phantom_size;
     po.tree = src.phantom_tree;
+    po.lumen = src.phantom_lumen;
     Phantom p = make_phantom(po);
     return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines),
             std::move(p.anatomy)};
@@ -751,7 +757,10 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
         src, o, dense ? &*dense : nullptr, writer, all, t, stage);
   }
   stage.lap();
-  writer.write_centerlines(src.id, to_json(all));
+  nlohmann::json centerlines = to_json(all);
+  if (!src.phantom_lumen.none() && patient.anatomy)  // where the phantom's lumen narrows
+    centerlines["phantom_lumen"] = lumen_json(src.phantom_lumen, patient.anatomy->stenoses);
+  writer.write_centerlines(src.id, centerlines);
   t.writes += stage.lap();
   record["status"] = "ok";
   t.total = whole.lap();
