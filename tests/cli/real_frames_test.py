@@ -3,9 +3,12 @@
 match lies inside the exposed field as an independent detector sees it (tools/realism's
 half-rise rectangle: no match on the collimator frame), and the figures a reader wants are
 printed: matches per pair, the share on vessels (tools/realism's segmentation, 2 px around) and,
-ungated, the share within 5 px of the epipolar line of the pair's exported geometry (the table
-is not recorded: that geometry is tens of px off, docs/dicom.md). Skips cleanly without
-../shared. The images stay in ../shared: PNG copies go to TMP only.
+ungated, the share within 5 px of the epipolar line of the pair's exported geometry. The table
+is not recorded, so that geometry is tens of px off (docs/dicom.md): where a landmark could be
+placed by eye (sample1's catheter tip at the left main ostium), B's camera is aligned to it
+(gimm-match --landmark; the aligned camera recomputed here, independently, for the epipolar
+share); sample2's stays as exported. Skips cleanly without ../shared. The images stay in
+../shared: PNG copies go to TMP only.
 
 Usage: real_frames_test.py BIN_DIR TMP_DIR [WEIGHTS]
 (WEIGHTS: the learned matcher's weights to measure; default the shipped ones.)
@@ -39,6 +42,8 @@ T = lambda name: os.path.join(TMP, name)  # noqa: E731
 # (folder A, frame A, folder B, frame B, LCA view classes from the angles)
 PAIRS = [("sample1", "projection0", None, "projection1", None, 7, 9),
          ("sample2", "projection0", 20, "projection1", 20, 11, 9)]
+# One point in both views, by eye (docs/dicom.md): A (u, v), B (u, v).
+LANDMARKS = {"sample1": (130, 97, 183, 170)}
 
 
 def view(sample, folder, frame, tag):
@@ -59,6 +64,24 @@ def view(sample, folder, frame, tag):
     return png, path, grey.astype(np.float64) / 255.0
 
 
+def aligned_camera(path_a, path_b, landmark, out):
+    """B's camera moved so that the landmark's two rays meet, the shortest way (the rays' common
+    normal n, shift n (n . (C_A - C_B))): geometry/landmark_alignment.hpp's rule for one
+    landmark, written again here."""
+    cams = [json.load(open(p)) for p in (path_a, path_b)]
+    K, R, t = ([np.array(c[k], float).reshape(3, -1) for c in cams] for k in ("K", "R", "t"))
+    centre = [-R[i].T @ t[i][:, 0] for i in range(2)]
+    ray = [R[i].T @ np.linalg.solve(K[i], [landmark[2 * i], landmark[2 * i + 1], 1.0])
+           for i in range(2)]
+    n = np.cross(ray[0], ray[1])
+    n /= np.linalg.norm(n)
+    shift = n * n.dot(centre[0] - centre[1])
+    moved = dict(cams[1], t=list(t[1][:, 0] - R[1] @ shift))
+    moved.pop("P", None)
+    json.dump(moved, open(out, "w"))
+    return out
+
+
 def epipolar_px(F, a, b):
     l = np.hstack([a, np.ones((len(a), 1))]) @ F.T  # lines in B
     return np.abs(np.sum(l[:, :2] * b, 1) + l[:, 2]) / np.hypot(l[:, 0], l[:, 1])
@@ -70,13 +93,21 @@ for sample, fa, na, fb, nb, class_a, class_b in PAIRS:
     fields = [realism.rect_mask(img.shape, realism.exposed_field(img)[0]) for img in (img_a, img_b)]
     vessels = [np.asarray(realism.segment(img, f)) for img, f in zip((img_a, img_b), fields)]
     near_vessel = [realism.ndi.binary_dilation(v, iterations=2) for v in vessels]
-    F = np.array(json.loads(h.run("gimm-carm", "--pair", cam_a, cam_b).stdout)["F"])
+    landmark = LANDMARKS.get(sample)
+    aligned = aligned_camera(cam_a, cam_b, landmark, T(f"{sample}-b.aligned.json")) if landmark \
+        else cam_b
+    F = np.array(json.loads(h.run("gimm-carm", "--pair", cam_a, aligned).stdout)["F"])
+    if landmark:
+        a0, b0 = np.array([landmark[:2]], float), np.array([landmark[2:]], float)
+        check(epipolar_px(F, a0, b0)[0] < 0.05,
+              f"{sample}: the landmark is {epipolar_px(F, a0, b0)[0]:.2f} px off after aligning")
+    marks = ["--landmark", *landmark] if landmark else []
     for method, extra in (("geometric", ["--tolerance", 5]),
                           ("learned", ["--gate", "none", "--class-a", class_a,
                                        "--class-b", class_b, *WEIGHTS])):
         out = T(f"{sample}.{method}.json")
         h.run("gimm-match", "--image-a", png_a, "--image-b", png_b, "--camera-a", cam_a,
-              "--camera-b", cam_b, "--method", method, *extra, "--out", out)
+              "--camera-b", cam_b, "--method", method, *extra, *marks, "--out", out)
         if not os.path.exists(out):
             continue
         m = json.load(open(out))
@@ -91,5 +122,6 @@ for sample, fa, na, fb, nb, class_a, class_b in PAIRS:
                                f"collimator frame (outside tools/realism's field)")
         near_line = float(np.mean(epipolar_px(F, a, b) <= 5)) if n else float("nan")
         print(f"{sample} {method}: {n} matches; ends on vessels {on_vessel / max(2 * n, 1):.2f}; "
-              f"within 5 px of the epipolar line {near_line:.2f}")
+              f"within 5 px of the epipolar line {near_line:.2f}"
+              f"{' (B aligned to the landmark)' if landmark else ''}")
 h.finish("real_frames")
