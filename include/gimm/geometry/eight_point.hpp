@@ -5,6 +5,7 @@
 /// naming the argument; a degenerate configuration returns std::nullopt.
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
 #include <limits>
@@ -63,6 +64,32 @@ Scalar uniqueness_tolerance() {
   return Scalar(1000) * std::numeric_limits<Scalar>::epsilon();
 }
 
+/// The row a_i of the 8-point system for one pair of normalised points (x = x_a, x' = x_b),
+/// scaled by r: [x'x, x'y, x', y'x, y'y, y', x, y, 1] r.
+template <class Scalar>
+Eigen::Matrix<Scalar, 9, 1> eight_point_row(const Matrix3<Scalar>& Ta, const Matrix3<Scalar>& Tb,
+                                            const Eigen::Matrix<Scalar, 2, 1>& a,
+                                            const Eigen::Matrix<Scalar, 2, 1>& b, Scalar r) {
+  const Scalar xa = Ta(0, 0) * a.x() + Ta(0, 2), ya = Ta(0, 0) * a.y() + Ta(1, 2);
+  const Scalar xb = Tb(0, 0) * b.x() + Tb(0, 2), yb = Tb(0, 0) * b.y() + Tb(1, 2);
+  Eigen::Matrix<Scalar, 9, 1> row;
+  row << r * xb * xa, r * xb * ya, r * xb, r * yb * xa, r * yb * ya, r * yb, r * xa, r * ya, r;
+  return row;
+}
+
+/// F from the null vector f (row-major) of the normalised system: rank 2 enforced by SVD,
+/// denormalised, scaled to unit norm; nullopt when that fails.
+template <class Scalar>
+std::optional<Matrix3<Scalar>> fundamental_from_null_vector(const Eigen::Matrix<Scalar, 9, 1>& f,
+                                                            const Matrix3<Scalar>& Ta,
+                                                            const Matrix3<Scalar>& Tb) {
+  const Matrix3<Scalar> F_normalised = enforce_rank2<Scalar>(
+      Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(f.data()));
+  const Matrix3<Scalar> F = Tb.transpose() * F_normalised * Ta;
+  if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
+  return normalize_fundamental(F);
+}
+
 }  // namespace detail
 
 /// The paper's weighted normalised 8-point algorithm (gimm-paper.tex, Sec. "Epipolar Geometry
@@ -90,24 +117,40 @@ std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
 
   // Rows sqrt(w_i) a_i; M = A^T W^2 A accumulated as one (9, N) x (N, 9) product.
   Eigen::Matrix<Scalar, 9, Eigen::Dynamic> At(9, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Scalar sa = (*Ta)(0, 0), sb = (*Tb)(0, 0);
-    const Scalar xa = sa * x_a(0, i) + (*Ta)(0, 2), ya = sa * x_a(1, i) + (*Ta)(1, 2);
-    const Scalar xb = sb * x_b(0, i) + (*Tb)(0, 2), yb = sb * x_b(1, i) + (*Tb)(1, 2);
-    const Scalar r = std::sqrt(w(i));
-    At.col(i) << r * xb * xa, r * xb * ya, r * xb, r * yb * xa, r * yb * ya, r * yb, r * xa, r * ya,
-        r;
-  }
+  for (Eigen::Index i = 0; i < n; ++i)
+    At.col(i) = detail::eight_point_row<Scalar>(*Ta, *Tb, x_a.col(i), x_b.col(i), std::sqrt(w(i)));
   Eigen::Matrix<Scalar, 9, 9> M = Eigen::Matrix<Scalar, 9, 9>::Zero();
   M.template selfadjointView<Eigen::Lower>().rankUpdate(At);
   M = M.template selfadjointView<Eigen::Lower>();
   const auto f = detail::unique_null_vector<Scalar, 9>(M, detail::uniqueness_tolerance<Scalar>());
   if (!f) return std::nullopt;
-  const Matrix3<Scalar> F_normalised = detail::enforce_rank2<Scalar>(
-      Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(f->data()));
-  const Matrix3<Scalar> F = Tb->transpose() * F_normalised * (*Ta);
-  if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
-  return normalize_fundamental(F);
+  return detail::fundamental_from_null_vector<Scalar>(*f, *Ta, *Tb);
+}
+
+/// The 8-point on exactly 8 correspondences, RANSAC's minimal samples: the 8 x 9 system's null
+/// vector is then exact and unique (or the sample is degenerate), so it is found by LU with full
+/// pivoting instead of the 9 x 9 eigensolver, several times faster (docs/performance.md); the F
+/// is fundamental_8pt's on the same points to rounding (tested). No argument checks beyond the
+/// count: RANSAC checked the points once.
+template <class Scalar>
+std::optional<Matrix3<Scalar>> fundamental_8pt_minimal(const Points2<Scalar>& x_a,
+                                                       const Points2<Scalar>& x_b) {
+  GIMM_CHECK(x_a.cols() == 8 && x_b.cols() == 8,
+             "fundamental_8pt_minimal: needs exactly 8 correspondences, got "
+                 << x_a.cols() << " and " << x_b.cols());
+  const VectorX<Scalar> ones = VectorX<Scalar>::Ones(8);
+  const auto Ta = detail::weighted_normalization<Scalar>(x_a, ones);
+  const auto Tb = detail::weighted_normalization<Scalar>(x_b, ones);
+  if (!Ta || !Tb) return std::nullopt;
+  Eigen::Matrix<Scalar, 8, 9> A;
+  for (int i = 0; i < 8; ++i)
+    A.row(i) =
+        detail::eight_point_row<Scalar>(*Ta, *Tb, x_a.col(i), x_b.col(i), Scalar(1)).transpose();
+  Eigen::FullPivLU<Eigen::Matrix<Scalar, 8, 9>> lu(A);
+  lu.setThreshold(std::sqrt(detail::uniqueness_tolerance<Scalar>()));
+  if (lu.rank() < 8) return std::nullopt;  // a degenerate sample: no unique solution
+  const Eigen::Matrix<Scalar, 9, 1> f = lu.kernel().col(0).normalized();
+  return detail::fundamental_from_null_vector<Scalar>(f, *Ta, *Tb);
 }
 
 /// The unweighted 8-point (every weight 1).
@@ -120,9 +163,11 @@ std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
 // The double instance is costly to compile (a 9x9 eigensolver): gimm's own binaries compile it
 // once (src/instances/eight_point.cpp) and see it as extern here; consumers do not define
 // GIMM_EXTERN_INSTANCES and instantiate it as usual.
-#define GIMM_EIGHT_POINT_INSTANCES(EXTERN)                                \
-  EXTERN template std::optional<Matrix3<double>> fundamental_8pt<double>( \
-      const Points2<double>&, const Points2<double>&, const VectorX<double>&);
+#define GIMM_EIGHT_POINT_INSTANCES(EXTERN)                                        \
+  EXTERN template std::optional<Matrix3<double>> fundamental_8pt<double>(         \
+      const Points2<double>&, const Points2<double>&, const VectorX<double>&);    \
+  EXTERN template std::optional<Matrix3<double>> fundamental_8pt_minimal<double>( \
+      const Points2<double>&, const Points2<double>&);
 #ifdef GIMM_EXTERN_INSTANCES
 GIMM_EIGHT_POINT_INSTANCES(extern)
 #endif

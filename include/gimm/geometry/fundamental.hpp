@@ -134,6 +134,9 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   auto solve = [&](const Points2<Scalar>& a, const Points2<Scalar>& b) {
     return affine ? fundamental_affine<Scalar>(a, b) : fundamental_8pt<Scalar>(a, b);
   };
+  auto solve_minimal = [&](const Points2<Scalar>& a, const Points2<Scalar>& b) {
+    return affine ? fundamental_affine<Scalar>(a, b) : fundamental_8pt_minimal<Scalar>(a, b);
+  };
   auto residual_sq = [&](const Matrix3<Scalar>& F, Eigen::Index i) -> double {
     const Eigen::Matrix<Scalar, 2, 1> a = x_a.col(i), b = x_b.col(i);
     return options.distance == EpipolarDistance::sampson
@@ -195,7 +198,7 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
       sample_a.col(k) = x_a.col(order[static_cast<std::size_t>(k)]);
       sample_b.col(k) = x_b.col(order[static_cast<std::size_t>(k)]);
     }
-    const auto F = solve(sample_a, sample_b);
+    const auto F = solve_minimal(sample_a, sample_b);
     if (!F) {
       ++result.stats.degenerate_samples;
       continue;
