@@ -59,6 +59,18 @@ void BM_Gimm8pt(benchmark::State& state) {
 }
 BENCHMARK(BM_Gimm8pt)->Arg(8)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMicrosecond);
 
+/// RANSAC's minimal solver (LU on the 8 x 9 system), against BM_Gimm8pt/8 (the eigensolver).
+void BM_Gimm8ptMinimal(benchmark::State& state) {
+  const Scene& s = scene(8, 0.0);
+  std::optional<Eigen::Matrix3d> F;
+  for (auto _ : state) {
+    F = gimm::fundamental_8pt_minimal<double>(s.obs_a, s.obs_b);
+    benchmark::DoNotOptimize(F);
+  }
+  set_accuracy(state, s, F);
+}
+BENCHMARK(BM_Gimm8ptMinimal)->Unit(benchmark::kMicrosecond);
+
 void BM_Gimm8ptWeighted(benchmark::State& state) {
   const Scene& s = scene(static_cast<int>(state.range(0)), 0.0);
   gimm::Rng rng(7);
@@ -96,6 +108,7 @@ void BM_GimmRansac(benchmark::State& state) {
   }
   set_accuracy(state, s, result.F);
   state.counters["iterations"] = static_cast<double>(result.stats.iterations);
+  state.counters["local_opt"] = static_cast<double>(result.stats.local_optimizations);
   state.counters["inliers"] = static_cast<double>(result.stats.num_inliers);
 }
 BENCHMARK(BM_GimmRansac)->Arg(64)->Arg(256)->Arg(1024)->Unit(benchmark::kMicrosecond);

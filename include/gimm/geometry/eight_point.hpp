@@ -37,6 +37,25 @@ std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
   return T;
 }
 
+/// weighted_normalization with every weight 1, for 8 points, without its temporaries (RANSAC
+/// calls it for every sample).
+template <class Scalar>
+std::optional<Matrix3<Scalar>> normalization_of_8(const Points2<Scalar>& x) {
+  Eigen::Matrix<Scalar, 2, 1> mu = Eigen::Matrix<Scalar, 2, 1>::Zero();
+  for (int i = 0; i < 8; ++i) mu += x.col(i);
+  mu /= Scalar(8);
+  Scalar d = 0;
+  for (int i = 0; i < 8; ++i) d += (x.col(i) - mu).norm();
+  d /= Scalar(8);
+  if (!(d > std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + mu.norm()))) return std::nullopt;
+  const Scalar s = std::sqrt(Scalar(2)) / d;
+  Matrix3<Scalar> T;
+  T << s, 0, -s * mu.x(),  //
+      0, s, -s * mu.y(),   //
+      0, 0, 1;
+  return T;
+}
+
 /// Smallest eigenvector of a symmetric PSD matrix, or nullopt when the smallest eigenvalue is
 /// not isolated (second-smallest below `rel_tol` times the largest): the solution is not unique.
 template <class Scalar, int N>
@@ -77,14 +96,27 @@ Eigen::Matrix<Scalar, 9, 1> eight_point_row(const Matrix3<Scalar>& Ta, const Mat
   return row;
 }
 
-/// F from the null vector f (row-major) of the normalised system: rank 2 enforced by SVD,
-/// denormalised, scaled to unit norm; nullopt when that fails.
+/// The rank-2 matrix nearest F as enforce_rank2 finds it, F (I - v v^T) with v the eigenvector
+/// of F^T F of least eigenvalue (F's right singular vector of least singular value), at a
+/// third of the SVD's cost: for RANSAC's hypotheses.
+template <class Scalar>
+Matrix3<Scalar> enforce_rank2_fast(const Matrix3<Scalar>& F) {
+  const Eigen::SelfAdjointEigenSolver<Matrix3<Scalar>> eig(F.transpose() * F);
+  const Eigen::Matrix<Scalar, 3, 1> v = eig.eigenvectors().col(0);  // ascending eigenvalues
+  return F - (F * v) * v.transpose();
+}
+
+/// F from the null vector f (row-major) of the normalised system: rank 2 enforced (by SVD, or
+/// by enforce_rank2_fast when `fast`), denormalised, scaled to unit norm; nullopt when that
+/// fails.
 template <class Scalar>
 std::optional<Matrix3<Scalar>> fundamental_from_null_vector(const Eigen::Matrix<Scalar, 9, 1>& f,
                                                             const Matrix3<Scalar>& Ta,
-                                                            const Matrix3<Scalar>& Tb) {
-  const Matrix3<Scalar> F_normalised = enforce_rank2<Scalar>(
-      Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>>(f.data()));
+                                                            const Matrix3<Scalar>& Tb,
+                                                            bool fast = false) {
+  const Eigen::Map<const Eigen::Matrix<Scalar, 3, 3, Eigen::RowMajor>> F_full(f.data());
+  const Matrix3<Scalar> F_normalised =
+      fast ? enforce_rank2_fast<Scalar>(F_full) : enforce_rank2<Scalar>(F_full);
   const Matrix3<Scalar> F = Tb.transpose() * F_normalised * Ta;
   if (!F.allFinite() || !(F.norm() > 0)) return std::nullopt;
   return normalize_fundamental(F);
@@ -129,7 +161,8 @@ std::optional<Matrix3<Scalar>> fundamental_8pt(const Points2<Scalar>& x_a,
 
 /// The 8-point on exactly 8 correspondences, RANSAC's minimal samples: the 8 x 9 system's null
 /// vector is then exact and unique (or the sample is degenerate), so it is found by LU with full
-/// pivoting instead of the 9 x 9 eigensolver, several times faster (docs/performance.md); the F
+/// pivoting instead of the 9 x 9 eigensolver, and rank 2 is enforced without an SVD, several
+/// times faster (docs/performance.md); the F
 /// is fundamental_8pt's on the same points to rounding (tested). No argument checks beyond the
 /// count: RANSAC checked the points once.
 template <class Scalar>
@@ -138,19 +171,30 @@ std::optional<Matrix3<Scalar>> fundamental_8pt_minimal(const Points2<Scalar>& x_
   GIMM_CHECK(x_a.cols() == 8 && x_b.cols() == 8,
              "fundamental_8pt_minimal: needs exactly 8 correspondences, got "
                  << x_a.cols() << " and " << x_b.cols());
-  const VectorX<Scalar> ones = VectorX<Scalar>::Ones(8);
-  const auto Ta = detail::weighted_normalization<Scalar>(x_a, ones);
-  const auto Tb = detail::weighted_normalization<Scalar>(x_b, ones);
+  const auto Ta = detail::normalization_of_8<Scalar>(x_a);
+  const auto Tb = detail::normalization_of_8<Scalar>(x_b);
   if (!Ta || !Tb) return std::nullopt;
   Eigen::Matrix<Scalar, 8, 9> A;
   for (int i = 0; i < 8; ++i)
     A.row(i) =
         detail::eight_point_row<Scalar>(*Ta, *Tb, x_a.col(i), x_b.col(i), Scalar(1)).transpose();
-  Eigen::FullPivLU<Eigen::Matrix<Scalar, 8, 9>> lu(A);
-  lu.setThreshold(std::sqrt(detail::uniqueness_tolerance<Scalar>()));
-  if (lu.rank() < 8) return std::nullopt;  // a degenerate sample: no unique solution
-  const Eigen::Matrix<Scalar, 9, 1> f = lu.kernel().col(0).normalized();
-  return detail::fundamental_from_null_vector<Scalar>(f, *Ta, *Tb);
+  const Scalar tolerance = std::sqrt(detail::uniqueness_tolerance<Scalar>());
+  Eigen::Matrix<Scalar, 9, 1> f;
+  // Usually F~(2, 2) != 0: f = (g, 1) with the first 8 columns times g = -(the last), by LU with
+  // partial pivoting. A pivot near 0 (F~(2, 2) ~ 0, or a degenerate sample) takes full pivoting,
+  // which finds the null vector wherever it lies, or the rank below 8.
+  const Eigen::PartialPivLU<Eigen::Matrix<Scalar, 8, 8>> partial(A.template leftCols<8>());
+  const auto pivots = partial.matrixLU().diagonal().cwiseAbs();
+  if (pivots.minCoeff() > tolerance * pivots.maxCoeff()) {
+    f << partial.solve(-A.col(8)), Scalar(1);
+  } else {
+    Eigen::FullPivLU<Eigen::Matrix<Scalar, 8, 9>> full(A);
+    full.setThreshold(tolerance);
+    if (full.rank() < 8) return std::nullopt;  // a degenerate sample: no unique solution
+    f = full.kernel().col(0);
+  }
+  if (!f.allFinite()) return std::nullopt;
+  return detail::fundamental_from_null_vector<Scalar>(f.normalized(), *Ta, *Tb, true);
 }
 
 /// The unweighted 8-point (every weight 1).

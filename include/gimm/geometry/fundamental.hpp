@@ -88,7 +88,10 @@ struct RansacOptions {
   std::int64_t max_iterations = 10000;
   std::int64_t min_iterations = 10;
   int local_optimization_steps = 3;  ///< refits on inliers after each new best (0 = plain MSAC)
-  std::uint64_t seed = 0;            ///< same seed, same result
+  /// A local optimisation refits on at most this many of the inliers (a seeded sample, as
+  /// LO-RANSAC's inner samples: Chum et al. 2003), 0 = all; the final refit takes them all.
+  int local_optimization_sample = 64;
+  std::uint64_t seed = 0;  ///< same seed, same result
 };
 
 struct RansacStats {
@@ -123,6 +126,11 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   GIMM_CHECK(
       options.confidence > 0 && options.confidence < 1,
       "estimate_fundamental_ransac: confidence must be in (0, 1), got " << options.confidence);
+  GIMM_CHECK(options.local_optimization_steps >= 0 && options.local_optimization_sample >= 0,
+             "estimate_fundamental_ransac: local_optimization_steps and local_optimization_sample "
+             "must be >= 0, got "
+                 << options.local_optimization_steps << " and "
+                 << options.local_optimization_sample);
   GIMM_CHECK(options.max_iterations >= 1 && options.max_iterations <= kMaxRansacIterations &&
                  options.min_iterations >= 0 && options.min_iterations <= options.max_iterations,
              "estimate_fundamental_ransac: need 1 <= max_iterations <= "
@@ -158,11 +166,19 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
     }
     return std::make_pair(cost, count);
   };
-  auto refit = [&](const std::vector<char>& mask) -> std::optional<Matrix3<Scalar>> {
+  Rng lo_rng(options.seed ^ 0x10c41);
+  // Least squares on the inliers of `mask`, on a seeded sample of at most `at_most` (0: all).
+  auto refit = [&](const std::vector<char>& mask, int at_most) -> std::optional<Matrix3<Scalar>> {
     std::vector<Eigen::Index> idx;
     for (Eigen::Index i = 0; i < n; ++i)
       if (mask[static_cast<std::size_t>(i)]) idx.push_back(i);
     if (static_cast<Eigen::Index>(idx.size()) < minimal) return std::nullopt;
+    if (at_most >= minimal && idx.size() > static_cast<std::size_t>(at_most)) {
+      for (int k = 0; k < at_most; ++k)  // partial Fisher-Yates
+        std::swap(idx[static_cast<std::size_t>(k)],
+                  idx[k + lo_rng.below(static_cast<std::uint64_t>(idx.size() - k))]);
+      idx.resize(static_cast<std::size_t>(at_most));
+    }
     Points2<Scalar> a(2, idx.size()), b(2, idx.size());
     for (std::size_t k = 0; k < idx.size(); ++k) {
       a.col(k) = x_a.col(idx[k]);
@@ -205,7 +221,7 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
     }
     if (!consider(*F)) continue;
     for (int step = 0; step < options.local_optimization_steps; ++step) {
-      const auto refined = refit(result.inliers);
+      const auto refined = refit(result.inliers, options.local_optimization_sample);
       ++result.stats.local_optimizations;
       if (!refined || !consider(*refined)) break;
     }
@@ -222,7 +238,7 @@ RansacResult<Scalar> estimate_fundamental_ransac(const Points2<Scalar>& x_a,
   }
   if (result
           .F) {  // final least-squares refit on all inliers, kept only if it scores strictly better
-    if (const auto refined = refit(result.inliers)) consider(*refined);
+    if (const auto refined = refit(result.inliers, 0)) consider(*refined);
   }
   result.stats.inlier_ratio =
       static_cast<double>(result.stats.num_inliers) / static_cast<double>(n);
