@@ -343,6 +343,32 @@ TEST_CASE("estimate_fundamental_ransac finds the inliers among 30% outliers",
   CHECK((*other.F - F_true).norm() < 1e-6);
 }
 
+TEST_CASE("estimate_fundamental_ransac: sampled local optimisation finds what the full one does",
+          "[geometry][fundamental]") {
+  // 400 correspondences, 25% outliers: refitting on 64 sampled inliers (the default) or on all
+  // of them (0) gives the same inliers, and the final refit on all keeps the F as close.
+  const Camerad a = carm_pose(-35, 20).camera(), b = carm_pose(40, -10).camera();
+  auto scene = gimm_test::make_pair_scene(a, b, 400, 21);
+  Rng rng(4);
+  for (Eigen::Index i = 0; i < scene.x_a.cols(); ++i)
+    scene.x_b.col(i) += Eigen::Vector2d(rng.normal(0, 0.5), rng.normal(0, 0.5));
+  const Eigen::Matrix3d F_true = fundamental_from_cameras(a, b);
+  const auto inlier = contaminate(scene.x_a, scene.x_b, F_true, 100, 9);
+  RansacOptions sampled;
+  sampled.threshold_px = 1.5;
+  RansacOptions full = sampled;
+  full.local_optimization_sample = 0;
+  const auto rs = estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, sampled);
+  const auto rf = estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, full);
+  REQUIRE(rs.F);
+  REQUIRE(rf.F);
+  CHECK(rs.inliers == rf.inliers);
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < inlier.size(); ++i) right += rs.inliers[i] == inlier[i];
+  CHECK(right >= 390);
+  CHECK((*rs.F - *rf.F).norm() < 1e-9);
+}
+
 TEST_CASE("estimate_fundamental_ransac with noisy inliers", "[geometry][fundamental]") {
   const Camerad a = carm_pose(40, 0).camera(), b = carm_pose(-20, 25).camera();
   const Eigen::Matrix3d F_true = fundamental_from_cameras(a, b);
@@ -395,6 +421,10 @@ TEST_CASE("estimate_fundamental_ransac invalid options throw", "[geometry][funda
   options.min_iterations = std::int64_t(1) << 62;
   CHECK_THROWS_WITH(estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, options),
                     Contains("min_iterations <= max_iterations"));
+  options = {};
+  options.local_optimization_sample = -1;
+  CHECK_THROWS_WITH(estimate_fundamental_ransac<double>(scene.x_a, scene.x_b, options),
+                    Contains("local_optimization_sample must be >= 0") && Contains("-1"));
   options = {};
   CHECK_THROWS_WITH(
       estimate_fundamental_ransac<double>(Points2<double>(scene.x_a.leftCols(7)),
