@@ -13,7 +13,7 @@
 /// across the baseline, and no number of landmarks fixes the component along the baseline
 /// (moving B along it moves no epipolar plane): it stays 0.
 #include <Eigen/Core>
-#include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <vector>
 
@@ -45,8 +45,9 @@ inline LandmarkAlignment align_to_landmarks(const Camerad& camera_a, const Camer
                  << points_a.size() << " in A and " << points_b.size() << " in B");
   const Eigen::Vector3d gap = camera_a.center() - camera_b.center();
   const Eigen::Index n = static_cast<Eigen::Index>(points_a.size());
-  Eigen::MatrixXd normals(n, 3);
-  Eigen::VectorXd offsets(n);
+  // The normal equations N^T N s = N^T o, accumulated (3 x 3: no dynamic decomposition to compile).
+  Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right_side = Eigen::Vector3d::Zero();
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector2d &a = points_a[i], &b = points_b[i];
     GIMM_CHECK(a.allFinite() && b.allFinite() && camera_a.on_detector(a) && camera_b.on_detector(b),
@@ -57,16 +58,23 @@ inline LandmarkAlignment align_to_landmarks(const Camerad& camera_a, const Camer
     GIMM_CHECK(normal.norm() > 1e-9, "landmark alignment: landmark "
                                          << i + 1
                                          << " lies along the baseline (its rays are parallel)");
-    normals.row(i) = normal.normalized().transpose();
-    offsets(i) = normals.row(i).dot(gap);
+    const Eigen::Vector3d unit = normal.normalized();
+    normal_matrix += unit * unit.transpose();
+    right_side += unit * unit.dot(gap);
   }
-  // Least norm: directions the landmarks do not fix (singular values below 1e-3 of the largest:
-  // the baseline's, and with one landmark a second) stay unshifted.
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(normals, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  svd.setThreshold(1e-3);
+  // Least norm: directions the landmarks do not fix (eigenvalues of N^T N below 1e-6 of the
+  // largest, singular values of N below 1e-3: the baseline's, and with one landmark a second)
+  // stay unshifted.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(normal_matrix);
   LandmarkAlignment r;
-  r.shift_mm = svd.solve(offsets);
-  r.constrained_directions = static_cast<int>(svd.rank());
+  const double largest = eig.eigenvalues()(2);
+  for (int k = 0; k < 3; ++k) {
+    const double lambda = eig.eigenvalues()(k);
+    if (!(lambda > 1e-6 * largest)) continue;
+    const Eigen::Vector3d v = eig.eigenvectors().col(k);
+    r.shift_mm += v * (v.dot(right_side) / lambda);
+    ++r.constrained_directions;
+  }
   r.camera_b =
       moved_camera(camera_b, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(), r.shift_mm);
   const Eigen::Matrix3d before = fundamental_from_cameras(camera_a, camera_b),
