@@ -22,12 +22,9 @@ namespace detail {
 /// The paper's normalisation: weighted centroid mu, weighted mean distance d to it,
 /// s = sqrt(2) / d, T = [[s, 0, -s mu_x], [0, s, -s mu_y], [0, 0, 1]].
 /// Returns nullopt when all weighted points coincide (d = 0).
+/// T for centroid mu and mean distance d; nullopt when d is 0 (all points coincide).
 template <class Scalar>
-std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
-                                                      const VectorX<Scalar>& w) {
-  const Scalar total = w.sum();
-  const Eigen::Matrix<Scalar, 2, 1> mu = (x * w) / total;
-  const Scalar d = ((x.colwise() - mu).colwise().norm() * w)(0) / total;
+std::optional<Matrix3<Scalar>> normalization_from(const Eigen::Matrix<Scalar, 2, 1>& mu, Scalar d) {
   if (!(d > std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + mu.norm()))) return std::nullopt;
   const Scalar s = std::sqrt(Scalar(2)) / d;
   Matrix3<Scalar> T;
@@ -35,6 +32,15 @@ std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
       0, s, -s * mu.y(),   //
       0, 0, 1;
   return T;
+}
+
+template <class Scalar>
+std::optional<Matrix3<Scalar>> weighted_normalization(const Points2<Scalar>& x,
+                                                      const VectorX<Scalar>& w) {
+  const Scalar total = w.sum();
+  const Eigen::Matrix<Scalar, 2, 1> mu = (x * w) / total;
+  const Scalar d = ((x.colwise() - mu).colwise().norm() * w)(0) / total;
+  return normalization_from(mu, d);
 }
 
 /// weighted_normalization with every weight 1, for 8 points, without its temporaries (RANSAC
@@ -47,13 +53,7 @@ std::optional<Matrix3<Scalar>> normalization_of_8(const Points2<Scalar>& x) {
   Scalar d = 0;
   for (int i = 0; i < 8; ++i) d += (x.col(i) - mu).norm();
   d /= Scalar(8);
-  if (!(d > std::numeric_limits<Scalar>::epsilon() * (Scalar(1) + mu.norm()))) return std::nullopt;
-  const Scalar s = std::sqrt(Scalar(2)) / d;
-  Matrix3<Scalar> T;
-  T << s, 0, -s * mu.x(),  //
-      0, s, -s * mu.y(),   //
-      0, 0, 1;
-  return T;
+  return normalization_from(mu, d);
 }
 
 /// Smallest eigenvector of a symmetric PSD matrix, or nullopt when the smallest eigenvalue is
