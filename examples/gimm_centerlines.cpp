@@ -7,9 +7,9 @@
 #include <optional>
 
 #include "cli_common.hpp"
-#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/skeleton.hpp"
+#include "gimm/dataset/centerlines_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/volume_file.hpp"
 

@@ -19,7 +19,7 @@
 #include <iostream>
 
 #include "cli_common.hpp"
-#include "gimm/anatomy/centerlines_json.hpp"
+#include "gimm/dataset/centerlines_json.hpp"
 #include "gimm/match/tree_file.hpp"
 #include "gimm/metrics/report.hpp"
 #include "gimm/metrics/tree_error.hpp"

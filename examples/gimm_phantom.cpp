@@ -12,8 +12,8 @@
 #include <filesystem>
 
 #include "cli_common.hpp"
-#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/phantom.hpp"
+#include "gimm/dataset/centerlines_json.hpp"
 #include "gimm/io/nifti.hpp"
 #include "gimm/io/png.hpp"
 

@@ -1,7 +1,7 @@
 #pragma once
 /// The anatomy room: HU -> attenuation and contrast recipes, components and the LCA/RCA split,
 /// centerlines, the isocentre rule, vessel meshes, the procedural phantom. Needs gimm::gimm
-/// only; the centerlines' JSON record (anatomy/centerlines_json.hpp) is in the io umbrella.
+/// only; the centerlines' JSON record is the dataset room's (dataset/centerlines_json.hpp).
 #include "gimm/anatomy/attenuation.hpp"
 #include "gimm/anatomy/centerlines.hpp"
 #include "gimm/anatomy/components.hpp"

@@ -1,8 +1,6 @@
 #pragma once
 /// The io room (target gimm::io): JSON records, volumes (NIfTI, NRRD, MetaImage; read_volume
-/// picks by name), PNG and NPY images, gzip, atomic files, and the JSON records of the centerline
-/// tree and of image formation.
-#include "gimm/anatomy/centerlines_json.hpp"
+/// picks by name), PNG and NPY images, gzip, atomic files.
 #include "gimm/io/camera_json.hpp"
 #include "gimm/io/files.hpp"
 #include "gimm/io/gzip.hpp"
@@ -14,4 +12,3 @@
 #include "gimm/io/png.hpp"
 #include "gimm/io/volume_file.hpp"
 #include "gimm/io/voxel_data.hpp"
-#include "gimm/render/angiogram_formation_json.hpp"

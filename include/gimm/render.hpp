@@ -3,7 +3,7 @@
 /// axial pads, the DRR renderer, the prepared view renderer, and image formation (iodine,
 /// collimator shutters, the acquisition and processing chain). The Embree vessel-mesh projector
 /// (render/vessel_mesh_projector.hpp, target gimm::embree) is included on its own; the image
-/// formation's JSON record (render/angiogram_formation_json.hpp) is in the io umbrella.
+/// formation's JSON record is the dataset room's (dataset/formation_json.hpp).
 #include "gimm/render/angiogram_formation.hpp"
 #include "gimm/render/axial_pad.hpp"
 #include "gimm/render/collimator.hpp"

@@ -5,9 +5,9 @@
 #include <catch2/catch.hpp>
 
 #include "gimm/anatomy/attenuation.hpp"
-#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/anatomy/components.hpp"
 #include "gimm/anatomy/phantom.hpp"
+#include "gimm/dataset/centerlines_json.hpp"
 #include "gimm/geometry/carm.hpp"
 #include "gimm/render/drr.hpp"
 

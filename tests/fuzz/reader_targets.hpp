@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "gimm/anatomy/centerlines_json.hpp"
 #include "gimm/core/error.hpp"
+#include "gimm/dataset/centerlines_json.hpp"
 #include "gimm/dataset/reader.hpp"
 #include "gimm/dataset/run.hpp"
 #include "gimm/geometry/carm.hpp"

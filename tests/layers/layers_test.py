@@ -26,5 +26,16 @@ for room in sorted(os.listdir(root)):
                 if m and m.group(1) in ORDER and ORDER.index(m.group(1)) > ORDER.index(room):
                     bad.append(f"include/gimm/{room}/{name}:{n} includes {m.group(1)}/ "
                                f"(listed after {room}/)")
+# A room's umbrella (gimm/<room>.hpp) gathers that room: the same rule.
+for room in ORDER:
+    umbrella = os.path.join(root, room + ".hpp")
+    if not os.path.exists(umbrella):
+        continue
+    with open(umbrella) as f:
+        for n, line in enumerate(f, 1):
+            m = re.match(r'\s*#\s*include\s+"gimm/([a-z_]+)/', line)
+            if m and m.group(1) in ORDER and ORDER.index(m.group(1)) > ORDER.index(room):
+                bad.append(f"include/gimm/{room}.hpp:{n} includes {m.group(1)}/ "
+                           f"(listed after {room}/)")
 print("\n".join(bad) if bad else "layers: every include points up the table")
 sys.exit(1 if bad else 0)

@@ -8,8 +8,8 @@
 #include <limits>
 #include <vector>
 
+#include "gimm/dataset/formation_json.hpp"
 #include "gimm/render/angiogram_formation.hpp"
-#include "gimm/render/angiogram_formation_json.hpp"
 
 using namespace gimm;
 
