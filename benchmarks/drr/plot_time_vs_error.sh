@@ -15,6 +15,8 @@ build=${1:-$root/build}
 sbs=${2:-}
 tmp=$(mktemp -d)
 export OMP_NUM_THREADS=2
+[ -x "$build/benchmarks/gimm_drr_accuracy_bench" ] ||
+  { echo "error: $build/benchmarks/gimm_drr_accuracy_bench not built (cmake --build $build --target gimm_benchmarks)" >&2; exit 1; }
 "$build/benchmarks/gimm_drr_accuracy_bench" --benchmark_format=json \
   --benchmark_out="$tmp/acc.json" >/dev/null
 /usr/bin/python3 - "$tmp" <<'PY'

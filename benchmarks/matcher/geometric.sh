@@ -5,6 +5,8 @@
 #   benchmarks/matcher/geometric.sh BUILD [WORK_DIR]
 set -euo pipefail
 build=$1 work=${2:-$(mktemp -d)}
+[ -x "$build/benchmarks/gimm_geometric_bench" ] ||
+  { echo "error: $build/benchmarks/gimm_geometric_bench not built (cmake --build $build --target gimm_benchmarks)" >&2; exit 1; }
 for size in 256 512; do
   ds=$work/geometric-$size
   [ -f "$ds/manifest.json" ] || "$build/examples/gimm-dataset" --phantom 1 --style drr --seed 7 --rows $size \

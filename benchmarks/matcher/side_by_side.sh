@@ -28,7 +28,7 @@ grep -qs '^GIMM_ARCH:STRING=native$' "$build/CMakeCache.txt" ||
   echo "note: $build is not built with -DGIMM_ARCH=native; figures will not match docs/performance.md" >&2
 bench="$build/benchmarks/gimm_matcher_bench"
 for tool in "$bench" "$build/examples/gimm-phantom" "$build/examples/gimm-drr"; do
-  [ -x "$tool" ] || { echo "error: $tool not built" >&2; exit 1; }
+  [ -x "$tool" ] || { echo "error: $tool not built (cmake --build $build --target all gimm_benchmarks)" >&2; exit 1; }
 done
 $py -c "import torch, cv2" 2>/dev/null || { echo "error: python3-torch/python3-opencv missing: scripts/install-deps.sh all" >&2; exit 1; }
 command -v npm >/dev/null || { echo "error: npm missing (apt-get install npm)" >&2; exit 1; }
