@@ -9,9 +9,15 @@ file(RENAME ${WORK}/prefix ${WORK}/moved)
 if(NOT EXISTS ${WORK}/moved/share/doc/gimm/LICENSE)
   message(FATAL_ERROR "the package does not install its LICENSE")
 endif()
-foreach(consumer "readme_example;gimm" "main;gimm-io")
-  list(GET consumer 0 source)
+# gimm: the README's example (the renderer, OpenMP); gimm-io: the recipes' test_package with its
+# PNG round trip, which needs the module's libraries (zlib, libpng) and compiles in 5 s (main.cpp,
+# the CMake consumer's, instantiates the geometry's decompositions: 15 s).
+foreach(consumer "tests/package/readme_example.cpp;gimm;-DGIMM_TP_IO=0"
+                 "packaging/test_package/test_package.cpp;gimm-io;-DGIMM_TP_IO=1")
+  list(GET consumer 0 path)
   list(GET consumer 1 module)
+  list(GET consumer 2 define)
+  get_filename_component(source ${path} NAME_WE)
   execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${WORK}/moved/share/pkgconfig
     ${PKG_CONFIG} --cflags --libs ${module} OUTPUT_VARIABLE flags RESULT_VARIABLE rc
     ERROR_VARIABLE err OUTPUT_STRIP_TRAILING_WHITESPACE)
@@ -23,12 +29,12 @@ foreach(consumer "readme_example;gimm" "main;gimm-io")
                         "directory or EIGEN_DONT_PARALLELIZE")
   endif()
   separate_arguments(flag_list UNIX_COMMAND "${flags}")
-  execute_process(COMMAND ${CXX_FOR_PC} -std=c++17 -O1 ${GIMM_SOURCE}/tests/package/${source}.cpp
+  execute_process(COMMAND ${CXX_FOR_PC} -std=c++17 -O1 ${define} ${GIMM_SOURCE}/${path}
     ${flag_list} -o ${WORK}/pc_${source} RESULT_VARIABLE rc ERROR_VARIABLE err)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "compiling ${source}.cpp with pkg-config ${module} failed: ${err}")
   endif()
-  execute_process(COMMAND ${WORK}/pc_${source} RESULT_VARIABLE rc OUTPUT_QUIET)
+  execute_process(COMMAND ${WORK}/pc_${source} ${WORK} RESULT_VARIABLE rc OUTPUT_QUIET)
   if(NOT rc EQUAL 0)
     message(FATAL_ERROR "the pkg-config build of ${source}.cpp failed to run")
   endif()
