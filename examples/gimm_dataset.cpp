@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   int phantom_count = 0;
   bool quiet = false;
   gimm::LumenOptions lumen;
+  gimm::TortuosityOptions tortuosity;
   std::string export_format;
   app.add_option("--input", input,
                  "folder (sub-folders included) of ImageCAS-style <id>.img<ext> + "
@@ -65,6 +66,10 @@ int main(int argc, char** argv) {
                  "phantoms: sigma of the lumen's wavering along the vessels (0.05-0.1 look like "
                  "angiograms; default 0: a smooth taper)")
       ->check(gimm::cli::in_range(0, 0.3, true));
+  app.add_option("--tortuosity", tortuosity.sigma_mm,
+                 "phantoms: mm, sd of the vessels' irregular sideways wander on the heart (over "
+                 "4 mm along them; default 0: the classic course; anatomy/tortuosity.hpp)")
+      ->check(gimm::cli::in_range(0, 5, true));
   app.add_option("--tree", tree,
                  "classic|rich: the phantoms' coronary tree; rich adds septals, a conus, RV "
                  "and more branches (20-29) with Murray's-law calibres (docs/phantom.md); "
@@ -138,10 +143,13 @@ int main(int argc, char** argv) {
     if (tree != "classic" && !input.empty())
       throw CLI::ValidationError("--tree",
                                  "the tree is a phantom's; with --input it is the label's");
-    for (const char* flag : {"--stenoses", "--lumen-irregularity"})
+    for (const char* flag : {"--stenoses", "--lumen-irregularity", "--tortuosity"})
       if (app.count(flag) && !input.empty())
-        throw CLI::ValidationError(flag,
-                                   "the lumen is a phantom's; with --input it is the label's");
+        throw CLI::ValidationError(flag, std::string(flag) == "--tortuosity"
+                                             ? "the course is a phantom's; with --input it is "
+                                               "the label's"
+                                             : "the lumen is a phantom's; with --input it is "
+                                               "the label's");
     if (phantom_size_given() && !input.empty())
       throw CLI::ValidationError("--phantom-size",
                                  "the size is a phantom's; with --input it is the volume's");
@@ -231,6 +239,10 @@ int main(int argc, char** argv) {
       run.input["phantom_lumen"] = {{"stenoses", lumen.stenoses},
                                     {"irregularity", lumen.irregularity}};
       for (gimm::PatientSource& s : sources) s.phantom_lumen = lumen;
+    }
+    if (!tortuosity.none()) {
+      run.input["phantom_tortuosity"] = gimm::tortuosity_json(tortuosity);
+      for (gimm::PatientSource& s : sources) s.phantom_tortuosity = tortuosity;
     }
     if (!export_format.empty()) {  // ids the export cannot name: refused before any work
       std::vector<std::string> ids;

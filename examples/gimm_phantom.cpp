@@ -102,6 +102,12 @@ int main(int argc, char** argv) {
                  "angiograms; 0: a smooth taper)")
       ->check(gimm::cli::in_range(0, 0.3, true))
       ->capture_default_str();
+  gimm::TortuosityOptions tortuosity;
+  app.add_option("--tortuosity", tortuosity.sigma_mm,
+                 "mm: sd of the vessels' irregular sideways wander on the heart (over 4 mm "
+                 "along them; 0: the classic course)")
+      ->check(gimm::cli::in_range(0, 5, true))
+      ->capture_default_str();
   app.add_flag("--preview", preview, "also write S.slice.png and S.mip.png");
   return gimm::cli::run(app, argc, argv, [&] {
     const auto t0 = std::chrono::steady_clock::now();
@@ -112,6 +118,7 @@ int main(int argc, char** argv) {
     options.noise_hu = noise;
     options.tree = gimm::parse_tree_detail(tree);
     options.lumen = lumen;
+    options.tortuosity = tortuosity;
     const gimm::Phantom p = gimm::make_phantom(options);
     const auto t1 = std::chrono::steady_clock::now();
     nlohmann::json centerlines = gimm::to_json(p.centerlines);
@@ -125,6 +132,8 @@ int main(int argc, char** argv) {
                               {"heart_radius_mm", p.anatomy.radius_mm}};
     if (!lumen.none())
       centerlines["phantom"]["lumen"] = gimm::lumen_json(lumen, p.anatomy.stenoses);
+    if (!tortuosity.none())
+      centerlines["phantom"]["tortuosity"] = gimm::tortuosity_json(tortuosity);
     if (options.size == gimm::PhantomSize::chest)
       centerlines["phantom"]["chest"] = {{"left_dome_z_mm", p.anatomy.left_dome_z},
                                          {"right_dome_z_mm", p.anatomy.right_dome_z},

@@ -10,4 +10,5 @@
 #include "gimm/anatomy/lumen.hpp"
 #include "gimm/anatomy/phantom.hpp"
 #include "gimm/anatomy/skeleton.hpp"
+#include "gimm/anatomy/tortuosity.hpp"
 #include "gimm/anatomy/vessel_mesh.hpp"

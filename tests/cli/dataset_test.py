@@ -339,16 +339,24 @@ check(proc.returncode == 2 and "--vessels" in proc.stderr and "phantom" in proc.
       not os.path.exists(out), f"--vessels tubes with --input: {proc.returncode} {proc.stderr}")
 
 # The lumen is a phantom's too; with phantoms the stenoses drawn are recorded per patient.
-for flag in (["--stenoses", "1"], ["--lumen-irregularity", "0.05"]):
+for flag in (["--stenoses", "1"], ["--lumen-irregularity", "0.05"], ["--tortuosity", "1"]):
     out = os.path.join(TMP, "lumen_input")
     proc = run(["--input", TMP, *flag, "--out", out], ok=False)
     check(proc.returncode == 2 and flag[0] in proc.stderr and "phantom" in proc.stderr and
           not os.path.exists(out), f"{flag[0]} with --input: {proc.returncode} {proc.stderr}")
 out = os.path.join(TMP, "lumen")
 run(["--phantom", "1", "--style", "drr", "--tree", "rich", "--rows", "64", "--cols", "64",
-     "--pixel", "3.0", "--stenoses", "2", "--lumen-irregularity", "0.05", "--quiet", "--out", out])
+     "--pixel", "3.0", "--stenoses", "2", "--lumen-irregularity", "0.05", "--tortuosity", "1.5",
+     "--quiet", "--out", out])
 with open(os.path.join(out, "patients", "phantom-0000", "centerlines.json")) as f:
-    lumen = json.load(f).get("phantom_lumen", {})
+    record = json.load(f)
+lumen = record.get("phantom_lumen", {})
+check(record.get("phantom_tortuosity") == {"sigma_mm": 1.5, "correlation_mm": 4.0},
+      f"--tortuosity 1.5: centerlines.json records {record.get('phantom_tortuosity')}")
+proc = run(["--phantom", "1", "--tortuosity", "6", "--out", os.path.join(TMP, "tortuous")], ok=False)
+check(proc.returncode == 2 and "--tortuosity" in proc.stderr and
+      not os.path.exists(os.path.join(TMP, "tortuous")),
+      f"--tortuosity 6: {proc.returncode} {proc.stderr}")
 check(len(lumen.get("stenoses", [])) == 2 and lumen.get("irregularity") == 0.05 and
       all(0.3 <= s["severity"] <= 0.8 for s in lumen["stenoses"]),
       f"--stenoses 2: centerlines.json records {lumen}")

@@ -37,6 +37,7 @@
 #include "gimm/anatomy/chest.hpp"
 #include "gimm/anatomy/coronary_branches.hpp"
 #include "gimm/anatomy/lumen.hpp"
+#include "gimm/anatomy/tortuosity.hpp"
 #include "gimm/core/constants.hpp"
 #include "gimm/core/error.hpp"
 #include "gimm/core/parallel.hpp"
@@ -112,6 +113,7 @@ struct PhantomOptions {
   double noise_hu = 15.0;                 ///< scanner noise sigma; 0 for a noise-free volume
   TreeDetail tree = TreeDetail::classic;  ///< rich: side branches and Murray's-law calibres
   LumenOptions lumen;                     ///< stenoses and an irregular calibre (none: smooth)
+  TortuosityOptions tortuosity;           ///< an irregular course (none: the classic sinusoids)
   std::optional<VolumeGeometry> grid;     ///< overrides `size` (any spacing, crop or direction)
 };
 
@@ -245,10 +247,14 @@ struct SurfacePath {
 };
 
 /// Catmull-Rom through the control points in (h, phi), mapped to 3D and resampled every
-/// `step` mm, with seeded tortuosity (two sinusoids across the path, on the surface).
+/// `step` mm, with seeded tortuosity: two sinusoids across the path, on the surface, from `rng`;
+/// or, when `wander` is given and `tortuosity` is not none, the irregular displacement drawn from
+/// `wander` instead (the sinusoids' numbers are drawn all the same, so `rng` moves on alike).
 inline std::vector<Eigen::Vector3d> trace_surface_path(const HeartFrame& frame,
                                                        const SurfacePath& path, double offset,
-                                                       double step, Rng& rng) {
+                                                       double step, Rng& rng,
+                                                       const TortuosityOptions& tortuosity = {},
+                                                       Rng* wander = nullptr) {
   // Unwrap azimuths so each control point is within 180 degrees of the previous one (the
   // path never takes the long way round the heart).
   auto c = path.control;
@@ -291,17 +297,24 @@ inline std::vector<Eigen::Vector3d> trace_surface_path(const HeartFrame& frame,
   // Tortuosity: lateral displacement w(s) = sum A sin(2 pi s / L + phase), zero at the start.
   const double a1 = rng.uniform(0.6, 1.8), l1 = rng.uniform(14, 26), f1 = rng.uniform(0, 6.28);
   const double a2 = rng.uniform(0.3, 1.0), l2 = rng.uniform(6, 11), f2 = rng.uniform(0, 6.28);
+  std::vector<double> arc(out.size(), 0.0);
+  for (std::size_t n = 1; n < out.size(); ++n) arc[n] = arc[n - 1] + (out[n] - out[n - 1]).norm();
+  std::vector<double> irregular;  // when drawn, it replaces the two sinusoids (drawn all the same)
+  if (wander && !tortuosity.none()) {
+    irregular = smooth_process(arc, tortuosity.correlation_mm, *wander);
+    for (double& v : irregular) v *= tortuosity.sigma_mm;
+  }
   std::vector<Eigen::Vector3d> bent(out.size());
-  double s = 0;
   for (std::size_t n = 0; n < out.size(); ++n) {
-    if (n > 0) s += (out[n] - out[n - 1]).norm();
+    const double s = arc[n];
     const Eigen::Vector3d tangent =
         (out[std::min(n + 1, out.size() - 1)] - out[n == 0 ? 0 : n - 1]).normalized();
     const Eigen::Vector3d normal = frame.onto_surface(out[n], 10.0) - out[n];
     const Eigen::Vector3d across = tangent.cross(normal).normalized();
     const double ramp = std::min(1.0, s / 8.0);  // keep the junction with the parent in place
-    const double w =
-        ramp * (a1 * std::sin(6.2832 * s / l1 + f1) + a2 * std::sin(6.2832 * s / l2 + f2));
+    const double w = ramp * (irregular.empty() ? a1 * std::sin(6.2832 * s / l1 + f1) +
+                                                     a2 * std::sin(6.2832 * s / l2 + f2)
+                                               : irregular[n]);
     bent[n] = frame.onto_surface(out[n] + w * across, offset);
   }
   return bent;
@@ -361,6 +374,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   GIMM_CHECK(std::isfinite(options.noise_hu) && options.noise_hu >= 0 && options.noise_hu <= 1000,
              "make_phantom: noise_hu must be in [0, 1000] HU, got " << options.noise_hu);
   options.lumen.validate();
+  options.tortuosity.validate();
   Rng rng(options.seed);
   Phantom out;
   out.options = options;
@@ -428,6 +442,11 @@ inline Phantom make_phantom(const PhantomOptions& options) {
 
   // --- Coronary tree.
   const double off = 1.6, step = 0.5;
+  // The irregular course's stream of its own: without it the tree is the classic one exactly.
+  Rng wander = Rng(options.seed).fork(0x70a7);
+  auto surface_path = [&](const SurfacePath& path, Rng& draws) {
+    return trace_surface_path(frame, path, off, step, draws, options.tortuosity, &wander);
+  };
   CenterlineTree& tree = out.centerlines;
   auto add_branch = [&](const std::string& name, CoronarySystem system, int parent,
                         std::vector<Vector3d> pts, double r0, double r1) {
@@ -447,7 +466,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     const Vector3d start =
         pp[std::min(pp.size() - 1, static_cast<std::size_t>(f * (pp.size() - 1)))];
     path.control.insert(path.control.begin(), {frame.height(start), frame.azimuth(start) / kDeg});
-    auto pts = trace_surface_path(frame, path, off, step, draws);
+    auto pts = surface_path(path, draws);
     pts.front() = start;
     return pts;
   };
@@ -470,7 +489,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
     const auto& pp = tree.branches[parent].points;
     path.control.insert(path.control.begin(),
                         {frame.height(pp.back()), frame.azimuth(pp.back()) / kDeg});
-    auto pts = trace_surface_path(frame, path, off, step, rng);
+    auto pts = surface_path(path, rng);
     pts.front() = pp.back();
     return pts;
   };
@@ -518,7 +537,7 @@ inline Phantom make_phantom(const PhantomOptions& options) {
   SurfacePath rca_path{{{-2, -25}, {-3, -75 + jitter(6)}, {-1, -115 + jitter(5)}}};
   if (!left_dom) rca_path.control.push_back({1, -150 + jitter(4)});
   if (right_dom) rca_path.control.push_back({2, -158});
-  auto surface_part = trace_surface_path(frame, rca_path, off, step, rng);
+  auto surface_part = surface_path(rca_path, rng);
   rca_pts.insert(rca_pts.end(), surface_part.begin() + 1, surface_part.end());
   const int rca = add_branch("RCA", RCA, -1, rca_pts, 2.0 + jitter(0.15), left_dom ? 1.0 : 1.1);
   add_branch("AM", RCA, rca,

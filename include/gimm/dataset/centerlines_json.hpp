@@ -11,6 +11,7 @@
 
 #include "gimm/anatomy/centerlines.hpp"
 #include "gimm/anatomy/lumen.hpp"
+#include "gimm/anatomy/tortuosity.hpp"
 #include "gimm/io/files.hpp"
 
 namespace gimm {
@@ -28,6 +29,11 @@ inline nlohmann::json lumen_json(const LumenOptions& o, const std::vector<Stenos
   return {{"irregularity", o.irregularity},
           {"irregularity_mm", o.irregularity_mm},
           {"stenoses", stenoses}};
+}
+
+/// A phantom's irregular course: {"sigma_mm": lateral sd, "correlation_mm": along the vessel}.
+inline nlohmann::json tortuosity_json(const TortuosityOptions& o) {
+  return {{"sigma_mm", o.sigma_mm}, {"correlation_mm", o.correlation_mm}};
 }
 
 inline nlohmann::json to_json(const CenterlineTree& tree) {

@@ -148,8 +148,9 @@ struct PatientSource {
   std::optional<std::uint64_t> phantom_seed;
   PhantomSize phantom_size = PhantomSize::small;
   TreeDetail phantom_tree = TreeDetail::classic;
-  LumenOptions phantom_lumen;   ///< stenoses, irregular calibre (none: the smooth taper)
-  std::string split = "train";  ///< train | val | test (assign_splits)
+  LumenOptions phantom_lumen;            ///< stenoses, irregular calibre (none: the smooth taper)
+  TortuosityOptions phantom_tortuosity;  ///< an irregular course (none: the classic one)
+  std::string split = "train";           ///< train | val | test (assign_splits)
 };
 
 /// The id of an ImageCAS-style image file, "<id>.img<ext>" with <ext> any ending gimm reads
@@ -268,6 +269,8 @@ inline nlohmann::json patient_run(const PatientSource& src, const DatasetOptions
       input["phantom_lumen"] = {{"stenoses", src.phantom_lumen.stenoses},
                                 {"irregularity", src.phantom_lumen.irregularity},
                                 {"irregularity_mm", src.phantom_lumen.irregularity_mm}};
+    if (!src.phantom_tortuosity.none())
+      input["phantom_tortuosity"] = tortuosity_json(src.phantom_tortuosity);
   } else
     input = {{"image", src.image.filename().string()}, {"label", src.label.filename().string()}};
   return {{"parameters", o.to_json()}, {"input", input}, {"split", src.split}};
@@ -399,6 +402,7 @@ inline PatientVolumes read_patient(const PatientSource& src) {
     po.size = src.phantom_size;
     po.tree = src.phantom_tree;
     po.lumen = src.phantom_lumen;
+    po.tortuosity = src.phantom_tortuosity;
     Phantom p = make_phantom(po);
     return {volume_cast<float>(p.hu), std::move(p.label), std::move(p.centerlines),
             std::move(p.anatomy)};
@@ -760,6 +764,8 @@ inline nlohmann::json generate_patient(const PatientSource& src, const DatasetOp
   nlohmann::json centerlines = to_json(all);
   if (!src.phantom_lumen.none() && patient.anatomy)  // where the phantom's lumen narrows
     centerlines["phantom_lumen"] = lumen_json(src.phantom_lumen, patient.anatomy->stenoses);
+  if (!src.phantom_tortuosity.none() && patient.anatomy)
+    centerlines["phantom_tortuosity"] = tortuosity_json(src.phantom_tortuosity);
   writer.write_centerlines(src.id, centerlines);
   t.writes += stage.lap();
   record["status"] = "ok";
